@@ -1,0 +1,295 @@
+"""Load stepping and strength reduction: from a model to a verdict.
+
+``analyse`` applies the loads in steps (the paper's staged gravity), solves
+each step to equilibrium, and after every converged step commits the spring
+state; where springs failed and lost strength, the same load is solved
+again until no more strength is lost (the progressive redistribution of
+excess force).  ``factor_of_safety`` divides c, tan(phi) (and the tensile
+strength) by trial factors, each trial continuing from the last stable one.
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Callable
+
+import numpy as np
+import scipy.sparse.linalg as spla
+
+from .model import Model
+from .results import Analysis, Evidence, FactorOfSafety, Step, Trial, tabulate
+from .solver import Solve, System, build_system, residual, solve_equilibrium
+from .spring_law import SpringState, commit
+
+log = logging.getLogger(__name__)
+
+#: cascade limit: re-solves at one load level after strength was lost
+MAX_CASCADE = 100
+#: a block moves in the mechanism if its motion exceeds this share of the largest
+MECHANISM_SHARE = 0.01
+
+
+def _settle(system, state, q0, load_factor, factor, stage):
+    """Solve at one load level, re-solving while committed failures shed strength.
+
+    Returns ``(solve, state)``; the state is committed only if the solve converged.
+    """
+    tol = system.model.settings.tolerance
+    scale = system.assembly.dof_scale
+    f_norm = np.linalg.norm(load_factor * system.f_ext * scale)
+    sol = solve_equilibrium(
+        system, state, load_factor=load_factor, strength_factor=factor, q0=q0
+    )
+    iterations, history = sol.iterations, list(sol.residuals)
+    for _ in range(MAX_CASCADE):
+        if not sol.converged:
+            break
+        dn, ds = system.assembly.relative_displacement(sol.q)
+        new_state = commit(system.springs, state, sol.response, ds, stage)
+        resp, r = residual(system, sol.q, new_state, load_factor, factor)
+        state = new_state
+        if f_norm == 0 or np.linalg.norm(r * scale) <= tol * f_norm:
+            sol = Solve(True, sol.q, resp, iterations, history, "converged", sol.direction)
+            break
+        sol = solve_equilibrium(
+            system, state, load_factor=load_factor, strength_factor=factor, q0=sol.q
+        )
+        iterations += sol.iterations
+        history += sol.residuals
+    return Solve(sol.converged, sol.q, sol.response, iterations, history, sol.reason, sol.direction), state
+
+
+def _mechanism(system: System, sol: Solve, state, load_factor, factor):
+    """Direction of the failure mechanism: the lightly shifted Newton step.
+
+    Where the tangent is (nearly) singular the step is dominated by the
+    free motion; elsewhere it is elastic and orders of magnitude smaller.
+    """
+    asm = system.assembly
+    n_blocks = system.blocks.n_blocks
+    out = np.zeros((n_blocks, 3))
+    if asm.n_dof == 0:
+        return out, np.zeros(n_blocks, dtype=bool)
+    resp, r = residual(system, sol.q, state, load_factor, factor)
+    J = asm.stiffness(resp.d_nn, resp.d_sn, resp.d_ss, 1e-6, system.K0)
+    try:
+        d = spla.splu(J).solve(r)
+    except RuntimeError:
+        d = sol.direction
+    free = ~system.blocks.fixed
+    out[free] = d[asm.dof[free]]
+    size = np.sqrt(np.abs(system.blocks.area))
+    motion = np.hypot(out[:, 0], out[:, 1]) + np.abs(out[:, 2]) * size
+    top = motion.max()
+    if top <= 0 or not np.isfinite(top):
+        return out, np.zeros(n_blocks, dtype=bool)
+    return out / top, motion > MECHANISM_SHARE * top
+
+
+def _package(system, sol, state, load_factor, factor, stable, steps, q_ok):
+    """Assemble an :class:`Analysis` from the last solve."""
+    asm = system.assembly
+    free = ~system.blocks.fixed
+    disp = np.zeros((system.blocks.n_blocks, 3))
+    disp[free] = q_ok[asm.dof[free]]
+    if stable:
+        resp, _ = residual(system, q_ok, state, load_factor, factor)
+        mech = np.zeros_like(disp)
+        unstable = np.zeros(system.blocks.n_blocks, dtype=bool)
+    else:
+        resp = sol.response
+        mech, unstable = _mechanism(system, sol, state, load_factor, factor)
+    sp_res, if_res = tabulate(system, state, resp, factor, system.model.settings.reduce_tensile)
+    if stable:
+        slip = np.zeros(0, dtype=np.int64)
+    else:
+        faces = system.interfaces
+        moving = unstable[faces.block_a] | unstable[faces.block_b]
+        separating = unstable[faces.block_a] != unstable[faces.block_b]
+        slip = np.flatnonzero(moving & ((if_res.state > 0) | separating))
+    return Analysis(
+        system,
+        bool(stable),
+        float(load_factor),
+        float(factor),
+        disp,
+        mech,
+        unstable,
+        sp_res,
+        if_res,
+        slip,
+        tuple(steps),
+        state,
+    )
+
+
+def analyse(
+    model: Model | System,
+    *,
+    strength_factor: float = 1.0,
+    load_steps: int | None = None,
+    progress: Callable[[int, int], None] | None = None,
+) -> Analysis:
+    """Apply the loads in steps and find equilibrium, or the failure mechanism.
+
+    Parameters
+    ----------
+    model : Model or System
+    strength_factor : float
+        Divide c, tan(phi) (and the tensile strength) by this factor.
+    load_steps : int, optional
+        Overrides ``model.settings.load_steps``.
+    progress : callable, optional
+        Called as ``progress(step, n_steps)`` after each load step.
+
+    Returns
+    -------
+    Analysis
+        Verdict, displacements, stresses, failed interfaces (with the step of
+        first failure), unstable blocks and slip surface.
+
+    Examples
+    --------
+    >>> from rockdem import Blocks, Joint, Model, analyse
+    >>> ground = [(-5, -1), (5, -1), (5, 0), (-5, 0)]
+    >>> m = Model(Blocks.from_polygons([ground, [(0, 0), (1, 0), (1, 1), (0, 1)]],
+    ...                                fixed=[True, False], unit_weight=25),
+    ...           Joint(normal_stiffness=1e6, friction_angle=30))
+    >>> analyse(m).stable
+    True
+    """
+    system = model if isinstance(model, System) else build_system(model)
+    n_steps = load_steps or system.model.settings.load_steps
+    state = SpringState.initial(system.springs.n_springs)
+    q = np.zeros(system.assembly.n_dof)
+    steps: list[Step] = []
+    lam_prev = 0.0
+    sol = None
+    for k in range(1, n_steps + 1):
+        lam = k / n_steps
+        q0 = q * (lam / lam_prev) if lam_prev > 0 else q
+        sol, new_state = _settle(system, state, q0, lam, strength_factor, k)
+        ev = Evidence(sol.reason, sol.iterations, tuple(sol.residuals))
+        n_failed = int((new_state.yielded | new_state.broken).sum())
+        steps.append(Step(k, lam, strength_factor, sol.converged, ev, n_failed))
+        if progress is not None:
+            progress(k, n_steps)
+        if not sol.converged:
+            log.info("load step %d/%d: no equilibrium (%s)", k, n_steps, ev)
+            return _package(system, sol, state, lam_prev, strength_factor, False, steps, q)
+        state, q, lam_prev = new_state, sol.q, lam
+    return _package(system, sol, state, lam_prev, strength_factor, True, steps, q)
+
+
+def factor_of_safety(
+    model: Model | System,
+    *,
+    width: float = 0.005,
+    start: float = 1.0,
+    grow: float = 1.5,
+    smallest: float = 0.05,
+    largest: float = 100.0,
+    progress: Callable[[Trial], None] | None = None,
+) -> FactorOfSafety:
+    """Factor of safety by shear strength reduction, with continuation.
+
+    The loads are first applied in steps at ``start`` (default 1); each
+    further trial factor continues from the converged state at the largest
+    factor found stable so far (x ``grow`` after a success, bisection after
+    a failure) until the bracket is narrower than ``width``.
+
+    Returns
+    -------
+    FactorOfSafety
+        ``value`` is the midpoint of the bracket (within ``width / 2`` of the
+        limit); ``bracket[0]`` is the conservative, largest stable factor.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from rockdem import Blocks, Joint, Model, factor_of_safety
+    >>> d = np.radians(20)
+    >>> R = np.array([[np.cos(d), -np.sin(d)], [np.sin(d), np.cos(d)]])
+    >>> ground = np.array([(-5, -1), (5, -1), (5, 0), (-5, 0)]) @ R.T
+    >>> block = np.array([(0, 0), (1, 0), (1, 0.5), (0, 0.5)]) @ R.T
+    >>> m = Model(Blocks.from_polygons([ground, block], fixed=[True, False]),
+    ...           Joint(normal_stiffness=1e6, friction_angle=30), )
+    >>> fos = factor_of_safety(m)
+    >>> bool(abs(fos.value - np.tan(np.radians(30)) / np.tan(d)) < 0.005)
+    True
+    """
+    system = model if isinstance(model, System) else build_system(model)
+    trials: list[Trial] = []
+
+    def record(F, a: Analysis):
+        t = Trial(F, a.stable, a.evidence)
+        trials.append(t)
+        if progress is not None:
+            progress(t)
+
+    # 1. the staged gravity state at the starting factor (fresh, in load steps)
+    F = start
+    first = analyse(system, strength_factor=F)
+    record(F, first)
+    lo_an: Analysis | None = first if first.stable else None
+    hi_an: Analysis | None = None if first.stable else first
+    while lo_an is None:  # unstable at the start: reduce from scratch
+        hi_an = hi_an if hi_an is not None else first
+        F = F / grow
+        if F < smallest:
+            return FactorOfSafety(
+                None, (0.0, hi_an.strength_factor), "strength-independent", tuple(trials),
+                None, hi_an, _DEFINITION,
+            )
+        a = analyse(system, strength_factor=F)
+        record(F, a)
+        if a.stable:
+            lo_an = a
+        else:
+            hi_an = a
+    # 2. continuation: grow until failure, then bisect
+    stage = len(trials)
+    while hi_an is None or hi_an.strength_factor - lo_an.strength_factor > width:
+        if hi_an is None:
+            F = lo_an.strength_factor * grow
+            if F > largest:
+                return FactorOfSafety(
+                    None, (lo_an.strength_factor, np.inf), "no-failure", tuple(trials),
+                    lo_an, None, _DEFINITION,
+                )
+        else:
+            F = 0.5 * (lo_an.strength_factor + hi_an.strength_factor)
+        stage += 1
+        a = _continue(system, lo_an, F, stage)
+        record(F, a)
+        if a.stable:
+            lo_an = a
+        else:
+            hi_an = a
+    lo, hi = lo_an.strength_factor, hi_an.strength_factor
+    return FactorOfSafety(
+        0.5 * (lo + hi), (lo, hi), "strength", tuple(trials), lo_an, hi_an, _DEFINITION
+    )
+
+
+_DEFINITION = (
+    "shear strength reduction: c, tan(phi) and the tensile strength divided by F at full "
+    "load; each trial continues from the converged state of the largest stable F"
+)
+
+
+def _continue(system: System, base: Analysis, factor: float, stage: int) -> Analysis:
+    """One strength trial from the converged state of ``base``."""
+    asm = system.assembly
+    free = ~system.blocks.fixed
+    q0 = np.zeros(asm.n_dof)
+    q0[asm.dof[free].ravel()] = base.displacement[free].ravel()
+    lam = base.load_factor
+    sol, state = _settle(system, base.state, q0, lam, factor, stage)
+    ev = Evidence(sol.reason, sol.iterations, tuple(sol.residuals))
+    n_failed = int((state.yielded | state.broken).sum())
+    step = Step(stage, lam, factor, sol.converged, ev, n_failed)
+    steps = (*base.steps, step)
+    if sol.converged:
+        return _package(system, sol, state, lam, factor, True, steps, sol.q)
+    return _package(system, sol, base.state, lam, factor, False, steps, q0)

@@ -1,0 +1,149 @@
+"""The B operator, the degree-of-freedom map and the sparse stiffness.
+
+Every spring point ``k`` maps the six displacements of its two blocks
+``(ux_a, uy_a, w_a, ux_b, uy_b, w_b)`` to its relative displacement
+``(dn, ds)`` through a 2 x 6 matrix ``B_k``.  The stiffness
+``K = sum_k w_k B_k^T D_k B_k`` has a fixed sparsity pattern (3 x 3 blocks
+for every pair of touching free blocks): it is computed once and its values
+are refilled with one ``bincount`` per iteration.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+
+from .blocks import Blocks
+from .interfaces import Interfaces
+from .springs import Springs
+
+
+@dataclass(frozen=True, eq=False, repr=False)
+class Assembly:
+    """Everything needed to turn displacements into forces and stiffness.
+
+    Attributes
+    ----------
+    dof : ndarray of int, shape (n_blocks, 3)
+        Global equation number of each block's (ux, uy, w); -1 when fixed.
+    B : ndarray, shape (n_springs, 2, 6)
+        Rows ``dn`` and ``ds``; columns block a then block b.
+    columns : ndarray of int, shape (n_springs, 6)
+        Equation numbers of the six columns of ``B`` (-1 = fixed).
+    length_scale : float
+        Mean block size: scales moments and rotations in norms.
+    """
+
+    dof: np.ndarray
+    n_dof: int
+    B: np.ndarray
+    columns: np.ndarray
+    weight: np.ndarray
+    points_per_interface: int
+    indptr: np.ndarray
+    indices: np.ndarray
+    scatter: np.ndarray  # (n_interfaces * 36,) position in data, or -1
+    length_scale: float
+
+    @property
+    def nnz(self) -> int:
+        return len(self.indices)
+
+    @property
+    def dof_scale(self) -> np.ndarray:
+        """Multiply a residual by this to compare forces and moments/length."""
+        s = np.ones(self.n_dof)
+        s[2::3] = 1.0 / self.length_scale
+        return s
+
+    # ---------------------------------------------------------- kinematics
+    def relative_displacement(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """``(dn, ds)`` at every spring point for free-dof displacements ``q``."""
+        qe = np.append(q, 0.0)[self.columns]  # index -1 -> the appended zero
+        d = np.einsum("kij,kj->ki", self.B, qe)
+        return d[:, 0], d[:, 1]
+
+    def internal_force(self, force: np.ndarray) -> np.ndarray:
+        """``sum_k w_k B_k^T p_k`` for generalised forces ``p`` (n_springs, 2)."""
+        local = np.einsum("kij,ki->kj", self.B, force * self.weight[:, None])
+        valid = self.columns >= 0
+        return np.bincount(self.columns[valid], local[valid], minlength=self.n_dof)
+
+    def stiffness(self, d_nn, d_sn, d_ss, shift: float = 0.0, base=None) -> sp.csc_array:
+        """Tangent ``sum w B^T D B`` (+ ``shift * base``) on the fixed pattern.
+
+        ``D = [[d_nn, 0], [d_sn, d_ss]]`` per point (non-symmetric when
+        friction couples shear to normal stress).
+        """
+        w = self.weight
+        Bn, Bs = self.B[:, 0, :], self.B[:, 1, :]
+        # B^T D B = Bn^T (d_nn Bn) + Bs^T (d_sn Bn + d_ss Bs)
+        rowsum = (d_sn * w)[:, None] * Bn + (d_ss * w)[:, None] * Bs
+        local = np.einsum("ki,kj->kij", Bn, (d_nn * w)[:, None] * Bn)
+        local += np.einsum("ki,kj->kij", Bs, rowsum)
+        m = self.points_per_interface
+        per_face = local.reshape(-1, m, 6, 6).sum(axis=1).ravel()
+        valid = self.scatter >= 0
+        data = np.bincount(self.scatter[valid], per_face[valid], minlength=self.nnz)
+        if shift and base is not None:
+            data = data + shift * base.data
+        return sp.csc_array((data, self.indices, self.indptr), shape=(self.n_dof, self.n_dof))
+
+
+def build_assembly(blocks: Blocks, faces: Interfaces, springs: Springs) -> Assembly:
+    """B operator, equation numbers and the sparsity pattern (computed once)."""
+    free = ~blocks.fixed
+    n_free = int(free.sum())
+    dof = np.full((blocks.n_blocks, 3), -1, dtype=np.int64)
+    dof[free] = np.arange(3 * n_free).reshape(-1, 3)
+
+    a = faces.block_a[springs.interface]
+    b = faces.block_b[springs.interface]
+    n = faces.normal[springs.interface]
+    t = faces.tangent[springs.interface]
+    ra = springs.point - blocks.centroid[a]
+    rb = springs.point - blocks.centroid[b]
+
+    def cross(r, v):
+        return r[:, 0] * v[:, 1] - r[:, 1] * v[:, 0]
+
+    B = np.empty((springs.n_springs, 2, 6))
+    for row, v in enumerate((n, t)):
+        B[:, row, 0:2] = -v
+        B[:, row, 2] = -cross(ra, v)
+        B[:, row, 3:5] = v
+        B[:, row, 5] = cross(rb, v)
+    columns = np.concatenate([dof[a], dof[b]], axis=1)
+
+    # sparsity pattern: the 6 x 6 block of every interface
+    face_cols = np.concatenate([dof[faces.block_a], dof[faces.block_b]], axis=1)
+    rows = np.repeat(face_cols, 6, axis=1).ravel()
+    cols = np.tile(face_cols, (1, 6)).ravel()
+    valid = (rows >= 0) & (cols >= 0)
+    n_dof = 3 * n_free
+    key = cols[valid].astype(np.int64) * max(n_dof, 1) + rows[valid]
+    # every free dof also gets its diagonal, so the pattern is never empty
+    diag = np.arange(n_dof, dtype=np.int64) * (n_dof + 1)
+    unique, inverse = np.unique(np.concatenate([key, diag]), return_inverse=True)
+    scatter = np.full(len(rows), -1, dtype=np.int64)
+    scatter[valid] = inverse[: int(valid.sum())]
+    indices = (unique % max(n_dof, 1)).astype(np.int32)
+    col_of = unique // max(n_dof, 1)
+    indptr = np.concatenate([[0], np.cumsum(np.bincount(col_of, minlength=n_dof))]).astype(
+        np.int32
+    )
+    length_scale = float(np.sqrt(np.mean(np.abs(blocks.area)))) or 1.0
+    return Assembly(
+        dof,
+        n_dof,
+        B,
+        columns,
+        springs.weight,
+        springs.points_per_interface,
+        indptr,
+        indices,
+        scatter,
+        length_scale,
+    )

@@ -1,0 +1,163 @@
+"""Interfaces: the stretches of boundary that two blocks share.
+
+Two blocks meet wherever an edge of one and an edge of the other are
+collinear, run in opposite directions (both outlines are counter-clockwise)
+and overlap by a positive length.  Each such overlap is one interface
+``P0 -> P1`` with unit tangent ``t`` and unit normal ``n`` pointing from block
+``a`` into block ``b``.  Found with one spatial query over all edges.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import shapely
+
+from .blocks import Blocks
+from .errors import InputError
+
+
+@dataclass(frozen=True, eq=False, repr=False)
+class Interfaces:
+    """One row per interface segment (struct of arrays).
+
+    Attributes
+    ----------
+    block_a, block_b : ndarray of int
+        The two blocks (positions in :class:`Blocks`); ``n`` points a -> b.
+    start, end : ndarray, shape (n, 2)
+        End points ``P0`` and ``P1``.
+    joint : ndarray of int
+        Index into the model's joint table.
+    """
+
+    block_a: np.ndarray
+    block_b: np.ndarray
+    start: np.ndarray
+    end: np.ndarray
+    joint: np.ndarray
+
+    @property
+    def n_interfaces(self) -> int:
+        return len(self.block_a)
+
+    @property
+    def length(self) -> np.ndarray:
+        return np.hypot(*(self.end - self.start).T)
+
+    @property
+    def tangent(self) -> np.ndarray:
+        return (self.end - self.start) / self.length[:, None]
+
+    @property
+    def normal(self) -> np.ndarray:
+        """Unit normal from block a into block b (outward normal of a)."""
+        t = self.tangent
+        return np.column_stack([t[:, 1], -t[:, 0]])
+
+    @property
+    def midpoint(self) -> np.ndarray:
+        return 0.5 * (self.start + self.end)
+
+    def __repr__(self) -> str:
+        return f"<Interfaces: {self.n_interfaces:,} segments>"
+
+
+def find_interfaces(blocks: Blocks) -> Interfaces:
+    """All interfaces between the blocks (none between two fixed blocks).
+
+    Tolerances are relative to the model's extent, so the result does not
+    depend on the unit of length or on where the origin is.
+
+    Raises
+    ------
+    InputError
+        If a free block touches no other block.
+    """
+    p, q, owner = blocks.edges()
+    tol = blocks.tolerance
+    lines = shapely.linestrings(np.stack([p, q], axis=1))
+    tree = shapely.STRtree(lines)
+    i, j = tree.query(lines, predicate="dwithin", distance=tol)
+    keep = (owner[i] < owner[j]) & ~(blocks.fixed[owner[i]] & blocks.fixed[owner[j]])
+    i, j = i[keep], j[keep]
+    d_i = q[i] - p[i]
+    len_i = np.hypot(*d_i.T)
+    t_i = d_i / len_i[:, None]
+    n_i = np.column_stack([t_i[:, 1], -t_i[:, 0]])
+    # distance of j's end points from i's line, and their position along it
+    off0 = np.einsum("ij,ij->i", p[j] - p[i], n_i)
+    off1 = np.einsum("ij,ij->i", q[j] - p[i], n_i)
+    s0 = np.einsum("ij,ij->i", p[j] - p[i], t_i)
+    s1 = np.einsum("ij,ij->i", q[j] - p[i], t_i)
+    collinear = (np.abs(off0) <= tol) & (np.abs(off1) <= tol) & (s1 < s0)
+    lo = np.maximum(0.0, np.minimum(s0, s1))
+    hi = np.minimum(len_i, np.maximum(s0, s1))
+    ok = collinear & (hi - lo > 10 * tol)
+    i, t_i, lo, hi = i[ok], t_i[ok], lo[ok], hi[ok]
+    j = j[ok]
+    start = p[i] + lo[:, None] * t_i
+    end = p[i] + hi[:, None] * t_i
+    a, b = owner[i], owner[j]
+    order = np.lexsort((start[:, 1], start[:, 0], b, a))
+    faces = Interfaces(
+        a[order], b[order], start[order], end[order], np.zeros(len(order), dtype=np.int64)
+    )
+    _check_connected(blocks, faces)
+    return faces
+
+
+def _check_connected(blocks: Blocks, faces: Interfaces) -> None:
+    touched = np.zeros(blocks.n_blocks, dtype=bool)
+    touched[faces.block_a] = True
+    touched[faces.block_b] = True
+    lonely = np.flatnonzero(~touched & ~blocks.fixed)
+    if lonely.size:
+        raise InputError(
+            f"block {int(blocks.ids[lonely[0]])}",
+            "touches no other block along an edge (it would float)",
+            "move it onto its neighbours, make it fixed, or remove it",
+        )
+
+
+def assign_joints(
+    faces: Interfaces,
+    blocks: Blocks,
+    *,
+    default: int = 0,
+    ground: int | None = None,
+    lines: np.ndarray | None = None,
+    line_joint: np.ndarray | None = None,
+) -> Interfaces:
+    """Give every interface a joint index.
+
+    Precedence: the contact with a fixed block takes ``ground`` (if given);
+    otherwise an interface lying on one of ``lines`` (segments, shape
+    ``(m, 2, 2)``) takes that line's ``line_joint``; otherwise ``default``.
+    Where lines overlap, the first one listed wins.
+    """
+    joint = np.full(faces.n_interfaces, default, dtype=np.int64)
+    if lines is not None and len(lines):
+        lines = np.asarray(lines, dtype=float).reshape(-1, 2, 2)
+        line_joint = np.asarray(line_joint, dtype=np.int64)
+        tol = blocks.tolerance * 10
+        geoms = shapely.linestrings(lines)
+        tree = shapely.STRtree(geoms)
+        mids = shapely.points(faces.midpoint)
+        f, g = tree.query(mids, predicate="dwithin", distance=tol)
+        if f.size:
+            # the whole interface must lie on the line: both ends within tol
+            ends = shapely.distance(shapely.points(faces.start[f]), geoms[g]) <= tol
+            ends &= shapely.distance(shapely.points(faces.end[f]), geoms[g]) <= tol
+            f, g = f[ends], g[ends]
+            # first listed line wins: per interface keep the smallest line index
+            order = np.lexsort((g, f))
+            first = np.ones(len(order), dtype=bool)
+            first[1:] = f[order][1:] != f[order][:-1]
+            sel = order[first]
+            joint[f[sel]] = line_joint[g[sel]]
+    if ground is not None:
+        on_ground = blocks.fixed[faces.block_a] | blocks.fixed[faces.block_b]
+        joint[on_ground] = ground
+    return Interfaces(faces.block_a, faces.block_b, faces.start, faces.end, joint)

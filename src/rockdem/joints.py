@@ -1,0 +1,108 @@
+"""Joint properties: the strength and stiffness of one kind of interface."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from .errors import InputError
+
+
+@dataclass(frozen=True)
+class Joint:
+    """Properties of a joint set, a rock bridge, or the contact with the ground.
+
+    Stiffnesses are per unit length of interface per unit displacement
+    (for example kN/m^2/m); strengths are stresses (kN/m^2).
+
+    Parameters
+    ----------
+    normal_stiffness : float
+        ``kn``; choose it large against the loads (Chang: its absolute value
+        hardly changes the collapse result).
+    shear_stiffness : float, optional
+        ``ks``; default ``kn / stiffness_ratio``.
+    friction_angle : float
+        Peak friction angle in degrees, 0 <= phi < 90.
+    cohesion : float
+        Peak cohesion c >= 0.
+    tensile_strength : float
+        Tension cut-off >= 0 (0: an open joint carries no tension).
+    residual_cohesion : float, optional
+        Cohesion after the point has yielded.  Default 0 (brittle, as in
+        3DEC's Coulomb joint); set it equal to ``cohesion`` for a ductile joint.
+    residual_friction_angle : float, optional
+        Friction angle after yield, default ``friction_angle``.
+    stiffness_ratio : float
+        ``kn / ks`` used when ``shear_stiffness`` is not given (2 to 3 for
+        rock: ``2 (1 + nu)``).
+    name : str
+        Name reported with results (joint set, ``"bridge"``, ``"ground"``).
+
+    Examples
+    --------
+    >>> Joint(normal_stiffness=1e6, friction_angle=30).shear_stiffness
+    400000.0
+    """
+
+    normal_stiffness: float
+    friction_angle: float
+    shear_stiffness: float | None = None
+    cohesion: float = 0.0
+    tensile_strength: float = 0.0
+    residual_cohesion: float | None = 0.0
+    residual_friction_angle: float | None = None
+    stiffness_ratio: float = 2.5
+    name: str = "joint"
+
+    def __post_init__(self) -> None:
+        where = f"joint {self.name!r}"
+        _check(where, "normal_stiffness", self.normal_stiffness, lo=0.0, open_lo=True)
+        _check(where, "stiffness_ratio", self.stiffness_ratio, lo=0.0, open_lo=True)
+        if self.shear_stiffness is None:
+            object.__setattr__(self, "shear_stiffness", self.normal_stiffness / self.stiffness_ratio)
+        _check(where, "shear_stiffness", self.shear_stiffness, lo=0.0, open_lo=True)
+        _check(where, "friction_angle", self.friction_angle, lo=0.0, hi=90.0)
+        _check(where, "cohesion", self.cohesion, lo=0.0)
+        _check(where, "tensile_strength", self.tensile_strength, lo=0.0)
+        if self.residual_cohesion is None:
+            object.__setattr__(self, "residual_cohesion", self.cohesion)
+        if self.residual_friction_angle is None:
+            object.__setattr__(self, "residual_friction_angle", self.friction_angle)
+        _check(where, "residual_cohesion", self.residual_cohesion, lo=0.0)
+        _check(where, "residual_friction_angle", self.residual_friction_angle, lo=0.0, hi=90.0)
+
+    @property
+    def ductile(self) -> Joint:
+        """The same joint with its strength kept after yield (c_r = c, phi_r = phi)."""
+        return _replace(
+            self, residual_cohesion=self.cohesion, residual_friction_angle=self.friction_angle
+        )
+
+
+def _replace(joint: Joint, **changes) -> Joint:
+    from dataclasses import replace
+
+    return replace(joint, **changes)
+
+
+def _check(
+    where: str,
+    key: str,
+    value,
+    *,
+    lo: float | None = None,
+    hi: float | None = None,
+    open_lo: bool = False,
+) -> None:
+    try:
+        v = float(value)
+    except (TypeError, ValueError) as exc:
+        raise InputError(f"{where} {key}", f"{value!r} is not a number", "give a number") from exc
+    if not math.isfinite(v):
+        raise InputError(f"{where} {key}", f"{value} is not finite", "give a finite number")
+    if lo is not None and (v < lo or (open_lo and v == lo)):
+        rel = ">" if open_lo else ">="
+        raise InputError(f"{where} {key}", f"{v:g} is out of range", f"give a value {rel} {lo:g}")
+    if hi is not None and v >= hi:
+        raise InputError(f"{where} {key}", f"{v:g} is out of range", f"give a value < {hi:g}")

@@ -1,0 +1,197 @@
+"""The model: blocks, joint properties, loads and analysis settings.
+
+Immutable; analyses take a model and return results, never write into it,
+so strength-reduction and stabilisation trials can reuse it safely.
+Units are the user's, consistent throughout (for example kN, m, kPa, or
+t, m, t/m^2); angles in degrees.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from .blocks import Blocks
+from .errors import InputError
+from .joints import Joint
+
+
+@dataclass(frozen=True)
+class PointLoad:
+    """A force ``(fx, fy)`` at ``(x, y)`` on the block it pushes into.
+
+    ``support=True`` marks a bolt or anchor force (reported apart, and the
+    quantity the stabilisation search scales).
+    """
+
+    x: float
+    y: float
+    fx: float
+    fy: float
+    support: bool = False
+    name: str = ""
+
+    @classmethod
+    def anchor(cls, x: float, y: float, force: float, angle: float, name: str = "") -> PointLoad:
+        """A support force of magnitude ``force`` acting at ``angle`` degrees
+        counter-clockwise from +x (for example 180 - 15 pulls into a face
+        that looks toward +x, 15 degrees below horizontal)."""
+        a = np.radians(angle)
+        return cls(x, y, force * np.cos(a), force * np.sin(a), support=True, name=name)
+
+
+@dataclass(frozen=True)
+class LineLoad:
+    """A uniform traction ``(qx, qy)`` (force per unit length) on the block
+    boundary along the segment ``start -> end`` (for example a foundation)."""
+
+    start: tuple[float, float]
+    end: tuple[float, float]
+    qx: float
+    qy: float
+    name: str = ""
+
+
+@dataclass(frozen=True)
+class Loads:
+    """External loads besides self-weight.
+
+    Parameters
+    ----------
+    gravity : bool
+        Self-weight at each block's centroid (unit weight x area).
+    seismic_h : float
+        Pseudo-static horizontal coefficient: a force ``kh W`` toward +x.
+    seismic_v : float
+        Pseudo-static vertical coefficient: a force ``kv W`` downward.
+    points, lines : sequences of PointLoad, LineLoad
+    """
+
+    gravity: bool = True
+    seismic_h: float = 0.0
+    seismic_v: float = 0.0
+    points: tuple[PointLoad, ...] = ()
+    lines: tuple[LineLoad, ...] = ()
+
+    def __post_init__(self) -> None:
+        for key in ("seismic_h", "seismic_v"):
+            v = getattr(self, key)
+            if not np.isfinite(v) or abs(v) >= 1.0:
+                raise InputError(f"loads {key}", f"{v} is out of range", "use |k| < 1")
+        object.__setattr__(self, "points", tuple(self.points))
+        object.__setattr__(self, "lines", tuple(self.lines))
+
+
+@dataclass(frozen=True)
+class Settings:
+    """How the equations are integrated and solved.
+
+    Parameters
+    ----------
+    quadrature : {"lobatto", "gauss"}
+        Spring point rule; Lobatto includes the interface ends (exact pivoting).
+    points_per_interface : int
+        3 with Lobatto is Simpson's rule (the default).
+    load_steps : int
+        Increments of the loads (gravity applied in steps, as in the paper).
+        With c = 0 and no tensile strength the answer does not depend on it.
+    tolerance : float
+        Equilibrium when the scaled out-of-balance force is below
+        ``tolerance`` x the scaled external force.
+    max_iterations : int
+        Newton iterations per solve before the step is declared failed.
+    reduce_tensile : bool
+        Divide the tensile strength by the trial factor in strength reduction
+        (as cohesion and tan(phi) are).
+    """
+
+    quadrature: str = "lobatto"
+    points_per_interface: int = 3
+    load_steps: int = 5
+    tolerance: float = 1e-8
+    max_iterations: int = 60
+    reduce_tensile: bool = True
+
+    def __post_init__(self) -> None:
+        if self.load_steps < 1:
+            raise InputError("settings load_steps", f"{self.load_steps}", "use 1 or more steps")
+        if not 0 < self.tolerance < 1e-2:
+            raise InputError("settings tolerance", f"{self.tolerance}", "use 1e-12 to 1e-3")
+        if self.max_iterations < 1:
+            raise InputError("settings max_iterations", f"{self.max_iterations}", "use >= 1")
+
+
+@dataclass(frozen=True)
+class Model:
+    """A slope section ready to analyse.
+
+    Parameters
+    ----------
+    blocks : Blocks
+    joints : Joint or sequence of Joint
+        Joint property table.  The first entry is the default of every
+        interface not on a listed line and not touching the ground.
+    joint_lines : array (m, 2, 2), optional
+        Segments (joint traces); an interface lying on segment ``i`` takes
+        joint ``line_joint[i]`` (an index or a joint name).
+    line_joint : sequence of int or str, optional
+    ground : int or str, optional
+        Joint used on every contact with a fixed block.
+    loads : Loads
+    settings : Settings
+    name : str
+
+    Examples
+    --------
+    >>> from rockdem import Blocks, Joint, Model
+    >>> ground = [(-5, -1), (5, -1), (5, 0), (-5, 0)]
+    >>> block = [(0, 0), (1, 0), (1, 1), (0, 1)]
+    >>> m = Model(Blocks.from_polygons([ground, block], fixed=[True, False], unit_weight=25),
+    ...           Joint(normal_stiffness=1e6, friction_angle=30))
+    >>> m
+    <Model: 2 blocks, 1 joint types>
+    """
+
+    blocks: Blocks
+    joints: Joint | Sequence[Joint]
+    joint_lines: np.ndarray | None = None
+    line_joint: Sequence[int | str] | None = None
+    ground: int | str | None = None
+    loads: Loads = field(default_factory=Loads)
+    settings: Settings = field(default_factory=Settings)
+    name: str = "model"
+
+    def __post_init__(self) -> None:
+        joints = (self.joints,) if isinstance(self.joints, Joint) else tuple(self.joints)
+        if not joints:
+            raise InputError("model joints", "no joint properties", "give at least one Joint")
+        object.__setattr__(self, "joints", joints)
+        if self.ground is not None:
+            object.__setattr__(self, "ground", self.joint_index(self.ground))
+        if self.joint_lines is not None:
+            lines = np.asarray(self.joint_lines, dtype=float).reshape(-1, 2, 2)
+            if self.line_joint is None or len(self.line_joint) != len(lines):
+                raise InputError("model line_joint", "needs one joint per line", "list them")
+            idx = tuple(self.joint_index(j) for j in self.line_joint)
+            object.__setattr__(self, "joint_lines", lines)
+            object.__setattr__(self, "line_joint", idx)
+
+    def joint_index(self, key: int | str) -> int:
+        """Position of a joint in the table, by index or by name."""
+        if isinstance(key, str):
+            names = [j.name for j in self.joints]
+            if key not in names:
+                raise InputError(f"joint {key!r}", "is not defined", f"use one of {names}")
+            return names.index(key)
+        if not 0 <= int(key) < len(self.joints):
+            raise InputError(f"joint {key}", "index out of range", "use a defined joint")
+        return int(key)
+
+    def replace(self, **changes) -> Model:
+        """A copy with some fields changed."""
+        return replace(self, **changes)
+
+    def __repr__(self) -> str:
+        return f"<Model: {self.blocks.n_blocks:,} blocks, {len(self.joints)} joint types>"

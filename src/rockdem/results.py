@@ -1,0 +1,242 @@
+"""Frozen result containers: what an analysis returns, never written into the model."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .solver import System
+from .spring_law import STATE_NAMES, SpringState, strength
+
+
+@dataclass(frozen=True, eq=False)
+class Evidence:
+    """Why a solve was judged converged or failed."""
+
+    reason: str
+    iterations: int
+    residuals: tuple[float, ...]
+    certified: bool | None = None  # failure proven by the equilibrium LP (None: not checked)
+
+    def __str__(self) -> str:
+        last = self.residuals[-1] if self.residuals else float("nan")
+        cert = "" if self.certified is None else f", LP certificate: {self.certified}"
+        return f"{self.reason} after {self.iterations} iterations (residual {last:.2e}{cert})"
+
+
+@dataclass(frozen=True, eq=False)
+class Step:
+    """One load step or one strength-reduction trial."""
+
+    stage: int
+    load_factor: float
+    strength_factor: float
+    converged: bool
+    evidence: Evidence
+    n_failed_springs: int
+
+
+@dataclass(frozen=True, eq=False, repr=False)
+class SpringResults:
+    """Per spring point: stresses, state, local factor of safety, first failure."""
+
+    interface: np.ndarray
+    point: np.ndarray
+    sigma: np.ndarray
+    tau: np.ndarray
+    capacity: np.ndarray
+    state: np.ndarray
+    first_failure: np.ndarray
+
+    @property
+    def local_fos(self) -> np.ndarray:
+        """Shear strength over shear stress (inf where unstressed)."""
+        with np.errstate(divide="ignore", invalid="ignore"):
+            fos = np.where(np.abs(self.tau) > 0, self.capacity / np.abs(self.tau), np.inf)
+        return fos
+
+    @property
+    def state_name(self) -> np.ndarray:
+        return np.asarray(STATE_NAMES)[self.state]
+
+
+@dataclass(frozen=True, eq=False, repr=False)
+class InterfaceResults:
+    """Per interface: forces, mean stresses, state and first failure."""
+
+    block_a: np.ndarray  # user ids
+    block_b: np.ndarray
+    kind: np.ndarray  # joint name
+    length: np.ndarray
+    normal_force: np.ndarray
+    shear_force: np.ndarray
+    state: np.ndarray  # worst point state (2 tension > 1 shear > 0 elastic)
+    failed_fraction: np.ndarray  # fraction of the length that has failed
+    local_fos: np.ndarray
+    first_failure: np.ndarray  # -1 if never failed
+
+    @property
+    def normal_stress(self) -> np.ndarray:
+        return self.normal_force / self.length
+
+    @property
+    def shear_stress(self) -> np.ndarray:
+        return self.shear_force / self.length
+
+    @property
+    def state_name(self) -> np.ndarray:
+        return np.asarray(STATE_NAMES)[self.state]
+
+    @property
+    def n_interfaces(self) -> int:
+        return len(self.length)
+
+
+@dataclass(frozen=True, eq=False, repr=False)
+class Analysis:
+    """Result of a staged analysis (gravity in load steps) at one strength factor.
+
+    Attributes
+    ----------
+    stable : bool
+        Equilibrium was found at the full load.
+    load_factor : float
+        Largest load factor at which equilibrium was found.
+    displacement : ndarray (n_blocks, 3)
+        ``(ux, uy, rotation)`` of each block at the last equilibrium.
+    mechanism : ndarray (n_blocks, 3)
+        Direction of motion of the failure mechanism (zeros if stable),
+        scaled so that the largest block motion is 1.
+    unstable : ndarray of bool (n_blocks,)
+        Blocks that move in the failure mechanism.
+    slip_surface : ndarray of int
+        Interfaces (positions) that have failed and bound the moving blocks.
+    """
+
+    system: System
+    stable: bool
+    load_factor: float
+    strength_factor: float
+    displacement: np.ndarray
+    mechanism: np.ndarray
+    unstable: np.ndarray
+    springs: SpringResults
+    interfaces: InterfaceResults
+    slip_surface: np.ndarray
+    steps: tuple[Step, ...]
+    state: SpringState = field(repr=False)
+
+    @property
+    def unstable_blocks(self) -> np.ndarray:
+        """User ids of the blocks that move in the mechanism."""
+        return self.system.blocks.ids[self.unstable]
+
+    @property
+    def failed_interfaces(self) -> np.ndarray:
+        """Positions of interfaces with at least one failed point."""
+        return np.flatnonzero(self.interfaces.state > 0)
+
+    @property
+    def evidence(self) -> Evidence:
+        return self.steps[-1].evidence
+
+    @property
+    def verdict(self) -> str:
+        return "stable" if self.stable else "unstable"
+
+    def __repr__(self) -> str:
+        return (
+            f"<Analysis: {self.verdict}, load factor {self.load_factor:.3g}, "
+            f"{len(self.failed_interfaces)} failed interfaces, "
+            f"{int(self.unstable.sum())} unstable blocks>"
+        )
+
+
+@dataclass(frozen=True, eq=False, repr=False)
+class Trial:
+    """One strength-reduction trial."""
+
+    factor: float
+    stable: bool
+    evidence: Evidence
+
+
+@dataclass(frozen=True, eq=False, repr=False)
+class FactorOfSafety:
+    """Shear strength reduction factor of safety.
+
+    Attributes
+    ----------
+    value : float or None
+        Midpoint of the bracket; None when strength cannot control the
+        mechanism (toppling) or no stable state exists at any factor.
+    bracket : (float, float)
+        Largest factor found stable, smallest found unstable.
+    mode : str
+        ``"strength"`` (a value was found), ``"strength-independent"`` (the
+        mechanism forms even with the strengths multiplied by the largest
+        factor tried: toppling or a free block), or ``"no-failure"`` (stable
+        at the largest factor tried).
+    stable_analysis, failed_analysis : Analysis
+        The state at the lower end of the bracket and the mechanism at the
+        upper end.
+    """
+
+    value: float | None
+    bracket: tuple[float, float]
+    mode: str
+    trials: tuple[Trial, ...]
+    stable_analysis: Analysis | None
+    failed_analysis: Analysis | None
+    definition: str
+
+    def __repr__(self) -> str:
+        if self.value is None:
+            return f"<FactorOfSafety: none ({self.mode}), bracket {self.bracket}>"
+        lo, hi = self.bracket
+        return f"<FactorOfSafety: {self.value:.4f} in [{lo:.4f}, {hi:.4f}], {len(self.trials)} trials>"
+
+
+def tabulate(system: System, state: SpringState, resp, strength_factor: float, reduce_tensile):
+    """Spring and interface tables from a response and its committed state."""
+    springs = system.springs
+    c, tan_phi, tensile = strength(springs, state, 1.0, reduce_tensile)
+    cap = np.where(resp.open, 0.0, np.maximum(c + resp.sigma * tan_phi, 0.0))
+    sp_res = SpringResults(
+        springs.interface,
+        springs.point,
+        resp.sigma,
+        resp.tau,
+        cap,
+        state.state,
+        state.first_failure,
+    )
+    faces = system.interfaces
+    m = springs.points_per_interface
+    w = springs.weight.reshape(-1, m)
+    N = (w * resp.sigma.reshape(-1, m)).sum(1)
+    S = (w * resp.tau.reshape(-1, m)).sum(1)
+    C = (w * cap.reshape(-1, m)).sum(1)
+    st = state.state.reshape(-1, m)
+    failed_len = (w * (st > 0)).sum(1)
+    ff = state.first_failure.reshape(-1, m)
+    first = np.where((ff >= 0).any(1), np.where(ff >= 0, ff, np.iinfo(np.int64).max).min(1), -1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        fos = np.where(np.abs(S) > 0, C / np.abs(S), np.inf)
+    ids = system.blocks.ids
+    names = np.asarray([j.name for j in system.model.joints])
+    length = faces.length
+    if_res = InterfaceResults(
+        ids[faces.block_a],
+        ids[faces.block_b],
+        names[faces.joint],
+        length,
+        N,
+        S,
+        st.max(1) if st.size else np.zeros(0, dtype=int),
+        failed_len / length,
+        fos,
+        first,
+    )
+    return sp_res, if_res

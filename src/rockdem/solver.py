@@ -1,0 +1,189 @@
+"""One equilibrium solve: semismooth Newton with an adaptive shift.
+
+Given the committed spring state, the load factor and the strength factor,
+find block displacements ``q`` where the internal spring forces balance the
+external loads.  The residual is non-smooth (springs switch between
+elastic, sliding and open), so plain Newton may cycle; we use
+
+* the consistent tangent (non-symmetric where friction couples shear to
+  normal stress), assembled on the fixed sparsity pattern, LU-factorised;
+* a Levenberg-Marquardt shift ``beta K0`` (``K0`` the elastic stiffness):
+  ``beta`` grows x10 when the line search fails and shrinks /10 after a
+  full step; beyond ``BETA_MAX`` the solve gives up;
+* a backtracking line search on the scaled residual norm.
+
+Convergence is scale-free: moments are divided by the mean block size and
+the out-of-balance force is compared with the external force.  A solve that
+does not converge returns its evidence; deciding that the slope has failed
+is the caller's job (:mod:`rockdem.analysis`).
+"""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+from .assembly import Assembly, build_assembly
+from .blocks import Blocks
+from .interfaces import Interfaces, assign_joints, find_interfaces
+from .loads import block_loads
+from .model import Model
+from .spring_law import Response, SpringState, evaluate
+from .springs import Springs, place_springs
+
+log = logging.getLogger(__name__)
+
+BETA_START = 1e-8
+BETA_MAX = 0.1
+#: displacements beyond this multiple of the elastic response are a mechanism
+BLOWUP = 1e6
+
+
+@dataclass(frozen=True, eq=False, repr=False)
+class System:
+    """A model turned into arrays: built once, reused by every solve."""
+
+    model: Model
+    blocks: Blocks
+    interfaces: Interfaces
+    springs: Springs
+    assembly: Assembly
+    K0: sp.csc_array
+    f_block: np.ndarray  # (n_blocks, 3) external loads at full load factor
+    f_ext: np.ndarray  # (n_dof,)
+    elastic_scale: float  # scaled size of the elastic displacement under f_ext
+    lu0: object = field(default=None)
+
+    def __repr__(self) -> str:
+        return (
+            f"<System: {self.blocks.n_blocks:,} blocks, {self.interfaces.n_interfaces:,} "
+            f"interfaces, {self.springs.n_springs:,} springs, {self.assembly.n_dof:,} dof>"
+        )
+
+
+def build_system(model: Model, f_block: np.ndarray | None = None) -> System:
+    """Interfaces, springs, assembly and loads of a model."""
+    blocks = model.blocks
+    faces = find_interfaces(blocks)
+    faces = assign_joints(
+        faces,
+        blocks,
+        default=0,
+        ground=model.ground,
+        lines=model.joint_lines,
+        line_joint=model.line_joint,
+    )
+    s = model.settings
+    springs = place_springs(faces, model.joints, s.quadrature, s.points_per_interface)
+    asm = build_assembly(blocks, faces, springs)
+    n = springs.n_springs
+    K0 = asm.stiffness(springs.kn, np.zeros(n), springs.ks)
+    if f_block is None:
+        f_block = block_loads(blocks, model.loads)
+    free = ~blocks.fixed
+    f_ext = np.zeros(asm.n_dof)
+    f_ext[asm.dof[free].ravel()] = f_block[free].ravel()
+    lu0 = None
+    elastic = 1.0
+    if asm.n_dof:
+        lu0 = spla.splu(K0, permc_spec="COLAMD")
+        u = lu0.solve(f_ext)
+        elastic = float(np.max(np.abs(u / asm.dof_scale))) or 1.0
+    return System(model, blocks, faces, springs, asm, K0, f_block, f_ext, elastic, lu0)
+
+
+@dataclass(frozen=True, eq=False)
+class Solve:
+    """Outcome of one equilibrium solve, with its evidence."""
+
+    converged: bool
+    q: np.ndarray
+    response: Response
+    iterations: int
+    residuals: list[float]
+    reason: str
+    direction: np.ndarray  # last Newton direction (the mechanism if it failed)
+
+
+def residual(system: System, q, state, load_factor, factor):
+    """Response and scaled out-of-balance force at displacements q."""
+    asm = system.assembly
+    dn, ds = asm.relative_displacement(q)
+    resp = evaluate(
+        system.springs, state, dn, ds, factor, system.model.settings.reduce_tensile
+    )
+    r = load_factor * system.f_ext - asm.internal_force(resp.force)
+    return resp, r
+
+
+def solve_equilibrium(
+    system: System,
+    state: SpringState,
+    *,
+    load_factor: float = 1.0,
+    strength_factor: float = 1.0,
+    q0: np.ndarray | None = None,
+    max_iterations: int | None = None,
+) -> Solve:
+    """Displacements in equilibrium with the loads, from the committed state."""
+    asm = system.assembly
+    settings = system.model.settings
+    max_it = max_iterations or settings.max_iterations
+    scale = asm.dof_scale
+    q = np.zeros(asm.n_dof) if q0 is None else q0.copy()
+    f_norm = np.linalg.norm(load_factor * system.f_ext * scale)
+    resp, r = residual(system, q, state, load_factor, strength_factor)
+    if asm.n_dof == 0 or f_norm == 0.0:
+        return Solve(True, q, resp, 0, [0.0], "no load", np.zeros_like(q))
+    tol = settings.tolerance
+    merit = np.linalg.norm(r * scale) / f_norm
+    history = [merit]
+    beta = BETA_START
+    bound = BLOWUP * system.elastic_scale * max(load_factor, 1e-12)
+    direction = np.zeros_like(q)
+    reason = "iteration limit"
+    it = 0
+    for it in range(1, max_it + 1):
+        if merit <= tol:
+            return Solve(True, q, resp, it - 1, history, "converged", direction)
+        J = asm.stiffness(resp.d_nn, resp.d_sn, resp.d_ss, beta, system.K0)
+        try:
+            step = spla.splu(J, permc_spec="COLAMD").solve(r)
+        except RuntimeError:  # exactly singular: shift more
+            beta *= 10.0
+            if beta > BETA_MAX:
+                reason = "singular tangent"
+                break
+            continue
+        direction = step
+        alpha, accepted = 1.0, False
+        for _ in range(12):
+            q_try = q + alpha * step
+            resp_try, r_try = residual(system, q_try, state, load_factor, strength_factor)
+            merit_try = np.linalg.norm(r_try * scale) / f_norm
+            if merit_try <= (1.0 - 1e-4 * alpha) * merit:
+                accepted = True
+                break
+            alpha *= 0.5
+        if accepted:
+            q, resp, r, merit = q_try, resp_try, r_try, merit_try
+            history.append(merit)
+            if alpha == 1.0:
+                beta = max(beta / 10.0, BETA_START)
+        else:
+            beta *= 10.0
+            if beta > BETA_MAX:
+                reason = "no descent (shift limit)"
+                break
+        if np.max(np.abs(q / scale)) > bound:
+            reason = "displacements unbounded"
+            break
+    else:
+        if merit <= tol:
+            return Solve(True, q, resp, it, history, "converged", direction)
+    log.debug("solve failed after %d iterations: %s (residual %.3g)", it, reason, merit)
+    return Solve(False, q, resp, it, history, reason, direction)

@@ -1,0 +1,122 @@
+"""Elasto-plastic Winkler spring law, vectorised over all spring points.
+
+Normal: linear, never yields in compression; tension cut-off.  Shear:
+Mohr-Coulomb with return mapping.  The law is evaluated from the state
+*committed* at the last converged step plus the current total relative
+displacement; the state changes only through :func:`commit`.
+
+Sign conventions (METHOD.md section 2): ``dn > 0`` opens, ``sigma`` is
+compression-positive (``sigma = -kn dn``), ``tau = ks (ds - slip)``.
+The generalised forces conjugate to ``(dn, ds)`` are ``(-sigma, tau)``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .springs import Springs
+
+ELASTIC, SHEAR, TENSION = 0, 1, 2
+STATE_NAMES = ("elastic", "shear", "tension")
+
+
+@dataclass(frozen=True, eq=False)
+class SpringState:
+    """Committed state of every spring point.
+
+    Attributes
+    ----------
+    slip : ndarray
+        Plastic shear displacement.
+    yielded : ndarray of bool
+        Has reached its shear strength once (residual strength from then on).
+    broken : ndarray of bool
+        Has failed in tension (no cohesion or tensile strength any more).
+    first_failure : ndarray of int
+        Stage (load step or strength trial) of the first failure, -1 if none.
+    """
+
+    slip: np.ndarray
+    yielded: np.ndarray
+    broken: np.ndarray
+    first_failure: np.ndarray
+
+    @classmethod
+    def initial(cls, n: int) -> SpringState:
+        return cls(
+            np.zeros(n), np.zeros(n, dtype=bool), np.zeros(n, dtype=bool), np.full(n, -1)
+        )
+
+    @property
+    def state(self) -> np.ndarray:
+        """0 elastic, 1 shear-yielded, 2 tension-failed (tension wins)."""
+        return np.where(self.broken, TENSION, np.where(self.yielded, SHEAR, ELASTIC))
+
+
+@dataclass(frozen=True, eq=False)
+class Response:
+    """Spring stresses and tangent at a trial displacement."""
+
+    sigma: np.ndarray  # normal stress, compression positive
+    tau: np.ndarray  # shear stress
+    capacity: np.ndarray  # current shear strength (reduced by the factor)
+    open: np.ndarray  # bool: beyond the tension cut-off
+    sliding: np.ndarray  # bool: at the shear strength
+    d_sn: np.ndarray  # d tau / d dn (non-symmetric friction coupling)
+    d_ss: np.ndarray  # d tau / d ds
+    d_nn: np.ndarray  # d(-sigma) / d dn
+
+    @property
+    def force(self) -> np.ndarray:
+        """Generalised forces per unit length conjugate to (dn, ds), shape (n, 2)."""
+        return np.column_stack([-self.sigma, self.tau])
+
+
+def strength(springs: Springs, state: SpringState, factor: float = 1.0, reduce_tensile=True):
+    """Cohesion, tan(phi) and tensile strength in force, divided by ``factor``."""
+    failed = state.yielded | state.broken
+    c = np.where(state.broken, 0.0, np.where(failed, springs.cohesion_residual, springs.cohesion))
+    tan_phi = np.where(failed, springs.tan_phi_residual, springs.tan_phi)
+    tensile = np.where(failed, 0.0, springs.tensile)
+    return c / factor, tan_phi / factor, tensile / factor if reduce_tensile else tensile
+
+
+def evaluate(
+    springs: Springs,
+    state: SpringState,
+    dn: np.ndarray,
+    ds: np.ndarray,
+    factor: float = 1.0,
+    reduce_tensile: bool = True,
+) -> Response:
+    """Stresses and consistent tangent at relative displacements ``(dn, ds)``."""
+    c, tan_phi, tensile = strength(springs, state, factor, reduce_tensile)
+    kn, ks = springs.kn, springs.ks
+    sigma = -kn * dn
+    is_open = sigma < -tensile
+    sigma = np.where(is_open, 0.0, sigma)
+    raw_cap = c + sigma * tan_phi
+    cap = np.where(is_open, 0.0, np.maximum(raw_cap, 0.0))
+    tau_trial = ks * (ds - state.slip)
+    sliding = ~is_open & (np.abs(tau_trial) > cap)
+    sign = np.sign(tau_trial)
+    tau = np.where(is_open, 0.0, np.where(sliding, sign * cap, tau_trial))
+    closed = ~is_open
+    d_nn = np.where(closed, kn, 0.0)
+    d_ss = np.where(closed & ~sliding, ks, 0.0)
+    d_sn = np.where(sliding & (raw_cap > 0), -sign * kn * tan_phi, 0.0)
+    return Response(sigma, tau, cap, is_open, sliding, d_sn, d_ss, d_nn)
+
+
+def commit(
+    springs: Springs, state: SpringState, response: Response, ds: np.ndarray, stage: int
+) -> SpringState:
+    """The state after a converged step: plastic slip, failure flags, first failure."""
+    new_slip = np.where(response.sliding | response.open, ds - response.tau / springs.ks, state.slip)
+    yielded = state.yielded | response.sliding
+    broken = state.broken | response.open
+    newly = (yielded | broken) & (state.first_failure < 0)
+    first = np.where(newly, stage, state.first_failure)
+    return SpringState(new_slip, yielded, broken, first)
