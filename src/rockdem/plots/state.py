@@ -1,0 +1,312 @@
+"""Failure state: interfaces by state, slip surface, unstable blocks; progressive frames."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+from matplotlib.axes import Axes
+from matplotlib.collections import LineCollection, PolyCollection
+from matplotlib.figure import Figure
+from matplotlib.lines import Line2D
+from matplotlib.patches import Patch
+
+from . import _common as c
+from .model import draw_block_ids, draw_blocks
+
+
+@dataclass(frozen=True)
+class Frame:
+    """The failure state after one step of an analysis.
+
+    Attributes
+    ----------
+    index : int
+        Position in ``analysis.steps``.
+    stage, load_factor, strength_factor, converged :
+        Copied from the step.
+    spring_state : ndarray of int
+        0 elastic, 1 shear, 2 tension for every spring after this step.
+    interface_state : ndarray of int
+        Worst spring state on every interface.
+    final : bool
+        The last step (the slip surface and unstable blocks belong to it).
+    """
+
+    index: int
+    stage: int
+    load_factor: float
+    strength_factor: float
+    converged: bool
+    spring_state: np.ndarray
+    interface_state: np.ndarray
+    final: bool
+
+    @property
+    def label(self) -> str:
+        """A short caption, for example ``"stage 3: load x0.6, F = 1"``."""
+        text = f"stage {self.stage}: load x{self.load_factor:.3g}, F = {self.strength_factor:.4g}"
+        return text if self.converged else text + " (no equilibrium)"
+
+
+def frames(result) -> list[Frame]:
+    """The failure state at every load step / strength trial of an analysis.
+
+    A spring counts as failed at a step when its ``first_failure`` stage is
+    the stage of that step or of an earlier one; its state then is its final
+    state (a spring that first yielded in shear and later opened shows as
+    tension-failed from the stage it first failed).  Nothing is re-run.
+
+    Parameters
+    ----------
+    result : Analysis or FactorOfSafety
+        For a factor of safety, the analysis at the upper end of the bracket
+        (its steps are the load steps and then the chain of strength trials).
+    """
+    a = c.as_analysis(result)
+    sp = a.springs
+    n_if = a.system.interfaces.n_interfaces
+    out = []
+    seen: set[int] = set()
+    for k, step in enumerate(a.steps):
+        seen.add(int(step.stage))
+        failed = np.isin(sp.first_failure, sorted(seen)) & (sp.first_failure >= 0)
+        s_state = np.where(failed, sp.state, 0)
+        i_state = np.zeros(n_if, dtype=int)
+        np.maximum.at(i_state, sp.interface, s_state)
+        out.append(
+            Frame(
+                k,
+                int(step.stage),
+                float(step.load_factor),
+                float(step.strength_factor),
+                bool(step.converged),
+                s_state,
+                i_state,
+                k == len(a.steps) - 1,
+            )
+        )
+    return out
+
+
+def plot_failure(
+    result,
+    *,
+    ax: Axes | None = None,
+    step: int | None = None,
+    block_ids: bool = False,
+    unit: str = "m",
+    title: str | None = None,
+    legend: bool = True,
+    scale_bar: bool = True,
+) -> Axes:
+    """Draw the failure state: interfaces by state, the slip surface, unstable blocks.
+
+    Interfaces are coloured by their worst spring state: elastic grey,
+    shear-yielded red (vermillion), tension-failed blue.  The slip surface is
+    a wide purple band under them; the blocks that move in the failure
+    mechanism are shaded orange.
+
+    Parameters
+    ----------
+    result : Analysis, FactorOfSafety or Model
+        A model is analysed first; a factor of safety shows its failed
+        analysis (the mechanism just above the factor of safety).
+    ax : Axes, optional
+    step : int, optional
+        Show the state after ``analysis.steps[step]`` (default: the last).
+        The slip surface and unstable blocks are drawn at the last step only.
+    block_ids, unit, title, legend, scale_bar :
+        Display options.
+
+    Returns
+    -------
+    Axes
+        LineCollections with gids ``"interfaces-elastic"``,
+        ``"interfaces-shear"``, ``"interfaces-tension"`` (one segment per
+        interface), ``"slip-surface"``; PolyCollection ``"unstable"``.
+    """
+    a = c.as_analysis(result)
+    system = a.system
+    blocks = system.blocks
+    ax = c.new_axes(ax)
+    fr = frames(a)
+    frame = fr[-1 if step is None else step]
+    state = frame.interface_state if not frame.final else a.interfaces.state
+    draw_blocks(ax, blocks)
+    if frame.final and a.unstable.any():
+        verts = [blocks.outline(i) for i in np.flatnonzero(a.unstable)]
+        ax.add_collection(
+            PolyCollection(
+                verts,
+                facecolors=c.UNSTABLE_FACE,
+                alpha=0.55,
+                edgecolors="none",
+                zorder=1.5,
+                gid="unstable",
+            )
+        )
+    seg = c.segments(system)
+    if frame.final and len(a.slip_surface):
+        ax.add_collection(
+            LineCollection(
+                seg[a.slip_surface],
+                colors=c.SLIP_COLOR,
+                linewidths=6.0,
+                alpha=0.6,
+                capstyle="round",
+                zorder=2,
+                gid="slip-surface",
+            )
+        )
+    for s, name in enumerate(("elastic", "shear", "tension")):
+        sel = state == s
+        ax.add_collection(
+            LineCollection(
+                seg[sel],
+                colors=c.STATE_COLORS[s],
+                linewidths=1.0 if s == 0 else 2.2,
+                zorder=3 + s,
+                gid=f"interfaces-{name}",
+            )
+        )
+    if block_ids:
+        draw_block_ids(ax, blocks, free_only=True)
+    c.setup_space_axes(ax, blocks, unit, scale_bar=scale_bar)
+    if title is None:
+        verdict = ("stable" if a.stable else "unstable") if frame.final else frame.label
+        title = f"Failure state: {verdict}"
+        if frame.final:
+            title += f" (F = {a.strength_factor:.4g})"
+    ax.set_title(title)
+    if legend:
+        handles = [
+            Line2D(
+                [], [], color=c.STATE_COLORS[0], lw=1.0, label=f"elastic ({(state == 0).sum()})"
+            ),
+            Line2D(
+                [],
+                [],
+                color=c.STATE_COLORS[1],
+                lw=2.2,
+                label=f"shear-yielded ({(state == 1).sum()})",
+            ),
+            Line2D(
+                [],
+                [],
+                color=c.STATE_COLORS[2],
+                lw=2.2,
+                label=f"tension-failed ({(state == 2).sum()})",
+            ),
+        ]
+        if frame.final and len(a.slip_surface):
+            handles.append(
+                Line2D([], [], color=c.SLIP_COLOR, lw=6, alpha=0.6, label="slip surface")
+            )
+        if frame.final and a.unstable.any():
+            handles.append(
+                Patch(
+                    facecolor=c.UNSTABLE_FACE,
+                    alpha=0.55,
+                    label=f"unstable blocks ({int(a.unstable.sum())})",
+                )
+            )
+        ax.legend(handles=handles, loc="upper right", fontsize=7, framealpha=0.9)
+    return ax
+
+
+def _pick(n: int, most: int) -> list[int]:
+    """At most ``most`` indices out of ``n``, evenly spread, first and last kept."""
+    if n <= most:
+        return list(range(n))
+    return sorted({int(x) for x in np.rint(np.linspace(0, n - 1, most))})
+
+
+def plot_progressive(
+    result, *, max_frames: int = 12, ncols: int = 3, unit: str = "m", figwidth: float = 10.0
+) -> Figure:
+    """Small multiples of the failure state after each step (load step or trial).
+
+    Returns
+    -------
+    Figure
+        One axes per frame (at most ``max_frames``, evenly chosen, the first
+        and the last always shown), titled with the frame's stage.
+    """
+    a = c.as_analysis(result)
+    fr = frames(a)
+    chosen = _pick(len(fr), max_frames)
+    nrows = -(-len(chosen) // ncols)
+    ncols = min(ncols, len(chosen))
+    lo, hi = a.system.blocks.vertices.min(0), a.system.blocks.vertices.max(0)
+    aspect = (hi[1] - lo[1]) / max(hi[0] - lo[0], 1e-12)
+    height = nrows * (figwidth / ncols) * aspect + 0.6 * nrows + 0.6
+    fig = Figure(figsize=(figwidth, height), layout="constrained")
+    axes = fig.subplots(nrows, ncols, squeeze=False)
+    for ax, k in zip(axes.flat, chosen, strict=False):
+        plot_failure(a, ax=ax, step=k, unit=unit, title=fr[k].label, legend=False, scale_bar=False)
+        ax.title.set_fontsize(8)
+        ax.tick_params(labelsize=7)
+        ax.xaxis.label.set_fontsize(7)
+        ax.yaxis.label.set_fontsize(7)
+    for ax in axes.flat[len(chosen) :]:
+        ax.set_axis_off()
+    fig.legend(
+        handles=[
+            Line2D([], [], color=col, lw=2, label=lab)
+            for col, lab in zip(c.STATE_COLORS, c.STATE_LABELS, strict=True)
+        ]
+        + [
+            Line2D([], [], color=c.SLIP_COLOR, lw=6, alpha=0.6, label="slip surface"),
+            Patch(facecolor=c.UNSTABLE_FACE, alpha=0.55, label="unstable blocks"),
+        ],
+        loc="outside lower center",
+        ncols=5,
+        fontsize=8,
+    )
+    fig.suptitle("Progressive failure")
+    return fig
+
+
+def animate_progressive(
+    result,
+    out_file,
+    *,
+    fps: float = 1.5,
+    dpi: int = 90,
+    unit: str = "m",
+    figsize=(7.0, 4.5),
+    hold: int = 3,
+) -> Path:
+    """Write the progressive failure as an animated GIF (matplotlib's PillowWriter).
+
+    One frame per step of the analysis (see :func:`frames`); the last frame
+    is held ``hold`` extra frames.
+
+    Returns
+    -------
+    Path
+        The GIF written.
+    """
+    from matplotlib.animation import PillowWriter
+
+    a = c.as_analysis(result)
+    out = Path(out_file)
+    fig = Figure(figsize=figsize)
+    ax = fig.add_axes((0.1, 0.1, 0.86, 0.8))
+    writer = PillowWriter(fps=fps)
+    fr = frames(a)
+    with writer.saving(fig, str(out), dpi):
+        for k, frame in enumerate(fr):
+            ax.clear()
+            title = (
+                frame.label
+                if not frame.final
+                else (f"{frame.label} - {'stable' if a.stable else 'unstable'}")
+            )
+            plot_failure(a, ax=ax, step=k, unit=unit, title=title)
+            repeat = 1 + (hold if frame.final else 0)
+            for _ in range(repeat):
+                writer.grab_frame()
+    return out
