@@ -1,0 +1,5 @@
+"""``python -m rockdem``: the command line."""
+
+from .cli import main
+
+main()

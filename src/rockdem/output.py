@@ -1,0 +1,328 @@
+"""Result files: tables of blocks, interfaces and springs, and ``result.json``.
+
+:func:`write_results` writes ``blocks.csv``, ``interfaces.csv``,
+``springs.csv`` and ``result.json`` (the same tables plus the summary, the
+model echo and the rockdem version) into a folder, all or nothing: the files
+are written into a temporary folder beside the target and moved into place
+only when all of them are complete.  Existing result files are replaced only
+with ``overwrite=True``.
+
+Sign conventions: normal forces and stresses are compression-positive;
+``state`` is the worst spring state on the interface (``elastic``, ``shear``
+or ``tension``); ``first_failure`` is the load step (or strength-reduction
+stage) at which the interface first failed, -1 if never; ``local_fos`` is the
+shear strength over the shear stress (``inf`` where unstressed).
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+import os
+import shutil
+import tempfile
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .errors import InputError
+
+#: The files :func:`write_results` writes.
+RESULT_FILES = ("blocks.csv", "interfaces.csv", "springs.csv", "result.json")
+
+__all__ = [
+    "RESULT_FILES",
+    "analysis_summary",
+    "analysis_tables",
+    "check_output_dir",
+    "fos_summary",
+    "jsonable",
+    "write_results",
+]
+
+
+def jsonable(value: Any) -> Any:
+    """Plain JSON data from numpy scalars and arrays; inf and nan become None."""
+    if isinstance(value, dict):
+        return {str(k): jsonable(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [jsonable(v) for v in value]
+    if isinstance(value, np.ndarray):
+        return jsonable(value.tolist())
+    if isinstance(value, np.bool_ | bool):
+        return bool(value)
+    if isinstance(value, np.integer):
+        return int(value)
+    if isinstance(value, np.floating | float):
+        v = float(value)
+        return v if math.isfinite(v) else None
+    if isinstance(value, np.str_):
+        return str(value)
+    return value
+
+
+# --------------------------------------------------------------- tables
+def analysis_tables(analysis) -> dict[str, list[dict[str, Any]]]:
+    """Rows of the three tables of an :class:`~rockdem.Analysis`.
+
+    Returns
+    -------
+    dict
+        ``{"blocks": [...], "interfaces": [...], "springs": [...]}``, each a
+        list of rows (dicts with the same keys, in column order).
+    """
+    system = analysis.system
+    b = system.blocks
+    d, mech = analysis.displacement, analysis.mechanism
+    blocks = [
+        {
+            "id": int(b.ids[i]),
+            "fixed": bool(b.fixed[i]),
+            "area": float(b.area[i]),
+            "unit_weight": float(b.unit_weight[i]),
+            "weight": float(b.weight[i]),
+            "centroid_x": float(b.centroid[i, 0]),
+            "centroid_y": float(b.centroid[i, 1]),
+            "ux": float(d[i, 0]),
+            "uy": float(d[i, 1]),
+            "rotation": float(d[i, 2]),
+            "unstable": bool(analysis.unstable[i]),
+            "mechanism_x": float(mech[i, 0]),
+            "mechanism_y": float(mech[i, 1]),
+            "mechanism_rotation": float(mech[i, 2]),
+        }
+        for i in range(b.n_blocks)
+    ]
+    r = analysis.interfaces
+    faces = system.interfaces
+    normal_stress, shear_stress, state_name = r.normal_stress, r.shear_stress, r.state_name
+    slip = np.zeros(r.n_interfaces, dtype=bool)
+    slip[analysis.slip_surface] = True
+    interfaces = [
+        {
+            "interface": i,
+            "block_a": int(r.block_a[i]),
+            "block_b": int(r.block_b[i]),
+            "kind": str(r.kind[i]),
+            "start_x": float(faces.start[i, 0]),
+            "start_y": float(faces.start[i, 1]),
+            "end_x": float(faces.end[i, 0]),
+            "end_y": float(faces.end[i, 1]),
+            "length": float(r.length[i]),
+            "normal_force": float(r.normal_force[i]),
+            "shear_force": float(r.shear_force[i]),
+            "normal_stress": float(normal_stress[i]),
+            "shear_stress": float(shear_stress[i]),
+            "state": str(state_name[i]),
+            "failed_fraction": float(r.failed_fraction[i]),
+            "local_fos": float(r.local_fos[i]),
+            "first_failure": int(r.first_failure[i]),
+            "slip_surface": bool(slip[i]),
+        }
+        for i in range(r.n_interfaces)
+    ]
+    s = analysis.springs
+    point_xy = system.springs.point
+    fos, s_state = s.local_fos, s.state_name
+    springs = [
+        {
+            "interface": int(s.interface[k]),
+            "point": k % system.springs.points_per_interface,
+            "x": float(point_xy[k, 0]),
+            "y": float(point_xy[k, 1]),
+            "sigma": float(s.sigma[k]),
+            "tau": float(s.tau[k]),
+            "capacity": float(s.capacity[k]),
+            "state": str(s_state[k]),
+            "first_failure": int(s.first_failure[k]),
+            "local_fos": float(fos[k]),
+        }
+        for k in range(len(s.sigma))
+    ]
+    return {"blocks": blocks, "interfaces": interfaces, "springs": springs}
+
+
+def _failed(analysis) -> list[dict[str, Any]]:
+    r = analysis.interfaces
+    names = r.state_name
+    return [
+        {
+            "interface": int(i),
+            "block_a": int(r.block_a[i]),
+            "block_b": int(r.block_b[i]),
+            "kind": str(r.kind[i]),
+            "state": str(names[i]),
+            "failed_fraction": float(r.failed_fraction[i]),
+            "first_failure": int(r.first_failure[i]),
+        }
+        for i in analysis.failed_interfaces
+    ]
+
+
+def analysis_summary(analysis) -> dict[str, Any]:
+    """The verdict of a staged analysis as plain data.
+
+    Keys: ``stable``, ``verdict``, ``load_factor``, ``strength_factor``,
+    ``unstable_blocks`` (ids), ``failed_interfaces`` (rows with the blocks,
+    kind, state and first failure), ``slip_surface`` (interface numbers),
+    ``steps`` and ``evidence``.
+    """
+    return jsonable(
+        {
+            "stable": analysis.stable,
+            "verdict": analysis.verdict,
+            "load_factor": analysis.load_factor,
+            "strength_factor": analysis.strength_factor,
+            "unstable_blocks": [int(i) for i in analysis.unstable_blocks],
+            "failed_interfaces": _failed(analysis),
+            "slip_surface": [int(i) for i in analysis.slip_surface],
+            "steps": [
+                {
+                    "stage": s.stage,
+                    "load_factor": s.load_factor,
+                    "strength_factor": s.strength_factor,
+                    "converged": s.converged,
+                    "failed_springs": s.n_failed_springs,
+                    "evidence": str(s.evidence),
+                }
+                for s in analysis.steps
+            ],
+            "evidence": str(analysis.evidence),
+        }
+    )
+
+
+def fos_summary(fos) -> dict[str, Any]:
+    """A :class:`~rockdem.FactorOfSafety` as plain data.
+
+    ``factor_of_safety`` is None when strength does not control the
+    mechanism; an open upper end of ``bracket`` is None (infinity).
+    ``mechanism_blocks`` are the blocks moving at the unstable end.
+    """
+    failed = fos.failed_analysis
+    return jsonable(
+        {
+            "factor_of_safety": fos.value,
+            "bracket": list(fos.bracket),
+            "mode": fos.mode,
+            "definition": fos.definition,
+            "mechanism_blocks": [] if failed is None else [int(i) for i in failed.unstable_blocks],
+            "trials": [
+                {"factor": t.factor, "stable": t.stable, "evidence": str(t.evidence)}
+                for t in fos.trials
+            ],
+        }
+    )
+
+
+# --------------------------------------------------------------- writing
+def check_output_dir(folder: str | Path, *, overwrite: bool = False) -> Path:
+    """Fail early if results cannot be written to ``folder``.
+
+    Raises
+    ------
+    InputError
+        ``folder`` is a file, or holds result files and ``overwrite`` is False.
+    """
+    folder = Path(folder)
+    if folder.exists() and not folder.is_dir():
+        raise InputError(f"--out {folder}", "is a file, not a folder", "give a folder")
+    if not overwrite:
+        for name in RESULT_FILES:
+            if (folder / name).exists():
+                raise InputError(
+                    f"--out {folder}",
+                    f"already holds {name}",
+                    "use --overwrite to replace the results, or another folder",
+                )
+    return folder
+
+
+def _write_csv(path: Path, rows: list[dict[str, Any]], columns: list[str]) -> None:
+    with path.open("w", newline="", encoding="utf-8") as fh:
+        writer = csv.DictWriter(fh, fieldnames=columns, lineterminator="\n")
+        writer.writeheader()
+        for row in rows:
+            writer.writerow({k: _csv_value(v) for k, v in row.items()})
+
+
+def _csv_value(v: Any) -> Any:
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, float):
+        return repr(v) if math.isfinite(v) else ("inf" if v > 0 else "-inf" if v < 0 else "nan")
+    return v
+
+
+_COLUMNS = {
+    "blocks": list(
+        "id fixed area unit_weight weight centroid_x centroid_y ux uy rotation unstable "
+        "mechanism_x mechanism_y mechanism_rotation".split()
+    ),
+    "interfaces": list(
+        "interface block_a block_b kind start_x start_y end_x end_y length normal_force "
+        "shear_force normal_stress shear_stress state failed_fraction local_fos "
+        "first_failure slip_surface".split()
+    ),
+    "springs": list(
+        "interface point x y sigma tau capacity state first_failure local_fos".split()
+    ),
+}
+
+
+def write_results(
+    folder: str | Path,
+    tables: dict[str, list[dict[str, Any]]],
+    document: dict[str, Any],
+    *,
+    overwrite: bool = False,
+) -> list[Path]:
+    """Write the result files into ``folder``, all or nothing.
+
+    Parameters
+    ----------
+    folder : str or Path
+        Created if needed (with its parents).
+    tables : dict
+        From :func:`analysis_tables`.
+    document : dict
+        Everything else for ``result.json`` (version, command, model echo,
+        summary); the tables are added under their names.
+    overwrite : bool
+        Replace result files already in ``folder``.
+
+    Returns
+    -------
+    list of Path
+        The files written.
+    """
+    folder = check_output_dir(folder, overwrite=overwrite)
+    parent = folder.parent
+    parent.mkdir(parents=True, exist_ok=True)
+    tmp = Path(tempfile.mkdtemp(prefix=f".{folder.name}.", suffix=".tmp", dir=parent))
+    umask = os.umask(0o022)
+    os.umask(umask)
+    os.chmod(tmp, 0o777 & ~umask)  # mkdtemp makes it private; the results are not
+    try:
+        for name in ("blocks", "interfaces", "springs"):
+            _write_csv(tmp / f"{name}.csv", tables[name], _COLUMNS[name])
+        doc = dict(document)
+        doc.update(tables)
+        with (tmp / "result.json").open("w", encoding="utf-8") as fh:
+            json.dump(jsonable(doc), fh, indent=1, allow_nan=False)
+            fh.write("\n")
+        if not folder.exists():
+            try:
+                os.rename(tmp, folder)
+                tmp = None
+            except OSError:  # created meanwhile: fall back to moving file by file
+                folder.mkdir(exist_ok=True)
+        if tmp is not None:
+            for name in RESULT_FILES:
+                os.replace(tmp / name, folder / name)
+    finally:
+        if tmp is not None:
+            shutil.rmtree(tmp, ignore_errors=True)
+    return [folder / name for name in RESULT_FILES]
