@@ -41,6 +41,10 @@ BETA_START = 1e-8
 BETA_MAX = 0.1
 #: displacements beyond this multiple of the elastic response are a mechanism
 BLOWUP = 1e6
+#: the strength homotopy starts with the strengths multiplied by 1 / this
+HOMOTOPY_START = 0.05
+#: smallest relative step of the homotopy before equilibrium is declared lost
+HOMOTOPY_MIN_STEP = 1e-4
 
 
 @dataclass(frozen=True, eq=False, repr=False)
@@ -109,61 +113,52 @@ class Solve:
     direction: np.ndarray  # last Newton direction (the mechanism if it failed)
 
 
-def residual(system: System, q, state, load_factor, factor):
-    """Response and scaled out-of-balance force at displacements q."""
+def residual(system: System, q, state, load_factor, factor, capacity=None):
+    """Response and out-of-balance force at displacements q."""
     asm = system.assembly
     dn, ds = asm.relative_displacement(q)
     resp = evaluate(
-        system.springs, state, dn, ds, factor, system.model.settings.reduce_tensile
+        system.springs, state, dn, ds, factor, system.model.settings.reduce_tensile, capacity
     )
     r = load_factor * system.f_ext - asm.internal_force(resp.force)
     return resp, r
 
 
-def solve_equilibrium(
-    system: System,
-    state: SpringState,
-    *,
-    load_factor: float = 1.0,
-    strength_factor: float = 1.0,
-    q0: np.ndarray | None = None,
-    max_iterations: int | None = None,
-) -> Solve:
-    """Displacements in equilibrium with the loads, from the committed state."""
+def _lu(J):
+    try:
+        return spla.splu(J, permc_spec="COLAMD")
+    except RuntimeError:  # exactly singular
+        return None
+
+
+def _newton(system, state, load_factor, factor, q, max_it):
+    """Semismooth Newton with an adaptive Levenberg-Marquardt shift and a
+    backtracking line search on the scaled residual."""
     asm = system.assembly
-    settings = system.model.settings
-    max_it = max_iterations or settings.max_iterations
     scale = asm.dof_scale
-    q = np.zeros(asm.n_dof) if q0 is None else q0.copy()
+    tol = system.model.settings.tolerance
     f_norm = np.linalg.norm(load_factor * system.f_ext * scale)
-    resp, r = residual(system, q, state, load_factor, strength_factor)
-    if asm.n_dof == 0 or f_norm == 0.0:
-        return Solve(True, q, resp, 0, [0.0], "no load", np.zeros_like(q))
-    tol = settings.tolerance
+    resp, r = residual(system, q, state, load_factor, factor)
     merit = np.linalg.norm(r * scale) / f_norm
     history = [merit]
     beta = BETA_START
     bound = BLOWUP * system.elastic_scale * max(load_factor, 1e-12)
     direction = np.zeros_like(q)
-    reason = "iteration limit"
-    it = 0
     for it in range(1, max_it + 1):
         if merit <= tol:
             return Solve(True, q, resp, it - 1, history, "converged", direction)
-        J = asm.stiffness(resp.d_nn, resp.d_sn, resp.d_ss, beta, system.K0)
-        try:
-            step = spla.splu(J, permc_spec="COLAMD").solve(r)
-        except RuntimeError:  # exactly singular: shift more
+        lu = _lu(asm.stiffness(resp.d_nn, resp.d_sn, resp.d_ss, beta, system.K0))
+        if lu is None:
             beta *= 10.0
             if beta > BETA_MAX:
-                reason = "singular tangent"
-                break
+                return Solve(False, q, resp, it, history, "singular tangent", direction)
             continue
+        step = lu.solve(r)
         direction = step
         alpha, accepted = 1.0, False
-        for _ in range(12):
+        for _ in range(8):
             q_try = q + alpha * step
-            resp_try, r_try = residual(system, q_try, state, load_factor, strength_factor)
+            resp_try, r_try = residual(system, q_try, state, load_factor, factor)
             merit_try = np.linalg.norm(r_try * scale) / f_norm
             if merit_try <= (1.0 - 1e-4 * alpha) * merit:
                 accepted = True
@@ -177,13 +172,69 @@ def solve_equilibrium(
         else:
             beta *= 10.0
             if beta > BETA_MAX:
-                reason = "no descent (shift limit)"
-                break
+                return Solve(False, q, resp, it, history, "no descent", direction)
         if np.max(np.abs(q / scale)) > bound:
-            reason = "displacements unbounded"
-            break
-    else:
-        if merit <= tol:
-            return Solve(True, q, resp, it, history, "converged", direction)
-    log.debug("solve failed after %d iterations: %s (residual %.3g)", it, reason, merit)
-    return Solve(False, q, resp, it, history, reason, direction)
+            return Solve(False, q, resp, it, history, "displacements unbounded", direction)
+    if merit <= tol:
+        return Solve(True, q, resp, max_it, history, "converged", direction)
+    return Solve(False, q, resp, max_it, history, "iteration limit", direction)
+
+
+def solve_equilibrium(
+    system: System,
+    state: SpringState,
+    *,
+    load_factor: float = 1.0,
+    strength_factor: float = 1.0,
+    q0: np.ndarray | None = None,
+    max_iterations: int | None = None,
+    homotopy_start: float | None = None,
+) -> Solve:
+    """Displacements in equilibrium with the loads, from the committed state.
+
+    First a direct semismooth Newton solve from ``q0``.  If that fails, a
+    homotopy in the strength: solve the same problem with the strengths
+    multiplied by 1 / ``homotopy_start`` (strong joints: few springs slide,
+    Newton converges), then weaken them step by step to the requested factor,
+    each solve starting from the previous one (step x1.5 after a success,
+    halved after a failure).  Equilibrium is declared lost only when a step
+    of relative size ``HOMOTOPY_MIN_STEP`` fails.
+    """
+    asm = system.assembly
+    max_it = max_iterations or system.model.settings.max_iterations
+    q = np.zeros(asm.n_dof) if q0 is None else q0.copy()
+    f_norm = np.linalg.norm(load_factor * system.f_ext * asm.dof_scale)
+    if asm.n_dof == 0 or f_norm == 0.0:
+        resp, _ = residual(system, q, state, load_factor, strength_factor)
+        return Solve(True, q, resp, 0, [0.0], "no load", np.zeros_like(q))
+    sol = _newton(system, state, load_factor, strength_factor, q, max_it)
+    if sol.converged:
+        return sol
+    # homotopy in the strength factor (no state is committed on the way)
+    F_target = strength_factor
+    F_ok = (homotopy_start or HOMOTOPY_START) * F_target
+    total = sol.iterations
+    history = list(sol.residuals)
+    start = _newton(system, state, load_factor, F_ok, np.zeros(asm.n_dof), max_it)
+    total += start.iterations
+    if not start.converged:
+        return Solve(False, sol.q, sol.response, total, history, "no start", sol.direction)
+    q_ok = start.q
+    growth = 1.5
+    while True:
+        F_try = min(F_ok * growth, F_target)
+        trial = _newton(system, state, load_factor, F_try, q_ok, max_it)
+        total += trial.iterations
+        history += trial.residuals
+        if trial.converged:
+            if F_try >= F_target:
+                return Solve(True, trial.q, trial.response, total, history, "converged",
+                             trial.direction)
+            F_ok, q_ok = F_try, trial.q
+            growth = min(growth * 1.5, 1.5)
+        else:
+            growth = 1.0 + 0.5 * (growth - 1.0)
+            if growth - 1.0 < HOMOTOPY_MIN_STEP:
+                reason = f"no equilibrium beyond strength factor {F_ok:.6g} ({trial.reason})"
+                return Solve(False, trial.q, trial.response, total, history, reason,
+                             trial.direction)
