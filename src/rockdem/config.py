@@ -122,8 +122,7 @@ def _number(value: Any) -> Any:
         if _NUMBER_WITH_UNIT.match(text):
             raise PydanticCustomError(
                 "number_with_unit",
-                "{value!r} has a unit; write the bare number in the units stated in `units` "
-                "(angles in degrees)",
+                "{value!r} has a unit",
                 {"value!r": repr(value)},
             )
         raise PydanticCustomError(
@@ -263,15 +262,15 @@ class ProfileSpec(_Section):
     face_angle: Annotated[Number, Field(gt=0.0, le=90.0)] | None = None
     """Simple slope: inclination of the face in degrees (0 < angle <= 90)."""
     crest_length: Annotated[Number, Field(gt=0.0)] | None = None
-    """Simple slope: length of the flat crest behind the face (default: the
-    geometry module's default)."""
+    """Simple slope: length of the flat ground behind the crest (default: the height)."""
     toe_length: Annotated[Number, Field(gt=0.0)] | None = None
-    """Simple slope: length of the flat ground in front of the toe (default: the
-    geometry module's default)."""
+    """Simple slope: length of the flat ground in front of the toe (default: half the
+    height)."""
     bench_width: Annotated[Number, Field(ge=0.0)] = 0.0
     """Simple slope: width of benches (0: no benches)."""
     bench_height: Annotated[Number, Field(gt=0.0)] | None = None
-    """Simple slope: vertical distance between benches."""
+    """Simple slope: vertical distance between benches, counted up from the toe
+    (needed when bench_width > 0)."""
     toe: Point = (0.0, 0.0)
     """Simple slope: position of the toe."""
 
@@ -300,7 +299,11 @@ class JointSetSpec(_Section):
     trace_length: Annotated[Number, Field(gt=0.0)] | None = None
     """Length of each joint trace (null: persistent joints across the slope)."""
     gap: Annotated[Number, Field(ge=0.0)] = 0.0
-    """Length of the rock bridges between traces of non-persistent joints."""
+    """Length of the rock bridges between traces of non-persistent joints (needs
+    `slope.bridge_joint`)."""
+    stagger: Annotated[Number, Field(ge=0.0, le=1.0)] = 0.0
+    """Shift of the trace pattern from one joint to the next, as a fraction of
+    trace_length + gap."""
     spacing_sd: Annotated[Number, Field(ge=0.0)] = 0.0
     """Standard deviation of the spacing (0: regular)."""
     dip_sd: Annotated[Number, Field(ge=0.0)] = 0.0
@@ -320,17 +323,23 @@ class SlopeSpec(_Section):
     """Material of the rock mass (default: the only one in `materials`)."""
     unit_weight: Annotated[Number, Field(ge=0.0)] | None = None
     """Unit weight of the rock mass (instead of `material`)."""
-    depth: Annotated[Number, Field(gt=0.0)] | None = None
-    """Depth of the modelled rock below the toe (default: the geometry module's)."""
-    behind: Annotated[Number, Field(gt=0.0)] | None = None
-    """Extent of the model behind the crest (default: the geometry module's)."""
+    depth: Annotated[Number, Field(gt=0.0)]
+    """Depth of the modelled rock below the lowest profile point."""
+    behind: Annotated[Number, Field(ge=0.0)] = 0.0
+    """Horizontal ground added behind (left of) the profile's first point."""
+    boundary: list[Literal["base", "back", "front"]] = ["base", "back", "front"]
+    """Sides of the section backed by a fixed strip of ground ([] for none)."""
+    ground_thickness: Annotated[Number, Field(gt=0.0)] | None = None
+    """Thickness of the fixed strips (default 10% of the larger section size)."""
     bridge_joint: str | None = None
     """Joint (name in `joints`) for the rock bridges between non-persistent joints."""
     fixed_region: Polygon | None = None
-    """Blocks inside this polygon are fixed ground (default: the geometry module's
-    rule, the rock below the toe)."""
-    min_block_fraction: Annotated[Number, Field(gt=0.0, lt=1.0)] = 0.05
-    """Slivers smaller than this fraction of a typical block are merged away."""
+    """Region of the section that is fixed ground (besides the `boundary` strips)."""
+    min_block_fraction: Annotated[Number, Field(ge=0.0, lt=1.0)] = 0.05
+    """Blocks smaller than this fraction of the median block area are slivers."""
+    slivers: Literal["merge", "report"] = "merge"
+    """Merge each sliver into the neighbour sharing its longest edge, or keep it and
+    only report it."""
     seed: Integer = 0
     """Random seed of the joint generation (reproducible models)."""
 
@@ -555,6 +564,10 @@ def parse_document(text: str, *, fmt: str = "yaml", source: str = "<string>") ->
             mark = exc.problem_mark or exc.context_mark
             line = mark.line + 1 if mark is not None else None
             problem = (exc.problem or exc.context or "syntax error").strip()
+            start = exc.context_mark
+            if exc.context and start is not None and line is not None \
+                    and start.line + 1 != line:
+                problem += f" ({exc.context} started at line {start.line + 1})"
             raise ModelFileError(
                 source,
                 "",
@@ -564,6 +577,7 @@ def parse_document(text: str, *, fmt: str = "yaml", source: str = "<string>") ->
             ) from None
         except yaml.YAMLError as exc:
             raise ModelFileError(source, "", f"not valid YAML: {exc}", "fix the syntax") from None
+        _check_duplicates(nodes, source)
     if data is None:
         raise ModelFileError(
             source, "", "the file is empty", "write a model (see `rockdem example list`)"
@@ -579,6 +593,27 @@ def parse_document(text: str, *, fmt: str = "yaml", source: str = "<string>") ->
     return data, nodes
 
 
+def _check_duplicates(node: Any, source: str, path: Loc = ()) -> None:
+    """PyYAML keeps the last of repeated keys silently; a repeated key is a mistake."""
+    if isinstance(node, yaml.MappingNode):
+        seen: set[str] = set()
+        for k, v in node.value:
+            key = k.value if isinstance(k, yaml.ScalarNode) else str(k)
+            if key in seen:
+                raise ModelFileError(
+                    source,
+                    _keypath((*path, key)),
+                    "the key is repeated",
+                    "keep only one of them",
+                    k.start_mark.line + 1,
+                )
+            seen.add(key)
+            _check_duplicates(v, source, (*path, key))
+    elif isinstance(node, yaml.SequenceNode):
+        for i, item in enumerate(node.value):
+            _check_duplicates(item, source, (*path, i))
+
+
 def validate_document(data: dict, *, source: str = "<string>", nodes: Any = None) -> ModelFile:
     """Validate parsed data against the file format and its cross-references.
 
@@ -590,7 +625,7 @@ def validate_document(data: dict, *, source: str = "<string>", nodes: Any = None
     try:
         cfg = ModelFile.model_validate(data)
     except ValidationError as exc:
-        raise _from_validation(exc, data, source, nodes) from None
+        raise _from_validation(exc, source, nodes) from None
     _check_references(cfg, source, nodes)
     return cfg
 
@@ -655,9 +690,9 @@ def _keypath(loc: Loc) -> str:
     return out
 
 
-def _line(nodes: Any, loc: Loc, *, key_line: bool = False) -> int | None:
-    """1-based line of the value (or the key) at ``loc`` in the YAML node tree."""
-    if nodes is None:
+def _line(nodes: Any, loc: Loc, *, key_line: bool = True) -> int | None:
+    """1-based line of the key (or the value) at ``loc`` in the YAML node tree."""
+    if nodes is None or not loc:
         return None
     node = nodes
     for part in loc:
@@ -739,8 +774,8 @@ def _field_doc(loc: Loc) -> str:
     return ""
 
 
-def _describe(err: dict, data: dict) -> tuple[Loc, str, str, bool]:
-    """(loc, problem, fix, at_key) for one pydantic error."""
+def _describe(err: dict) -> tuple[Loc, str, str]:
+    """(loc, problem, fix) for one pydantic error."""
     loc: Loc = tuple(p for p in err["loc"] if not _is_internal(p))
     kind = err["type"]
     value = err.get("input")
@@ -751,47 +786,52 @@ def _describe(err: dict, data: dict) -> tuple[Loc, str, str, bool]:
         allowed = list(parent.model_fields) if isinstance(parent, type) else []
         close = difflib.get_close_matches(str(loc[-1]), allowed, n=1, cutoff=0.6)
         fix = f"did you mean `{close[0]}`?" if close else f"allowed keys: {', '.join(allowed)}"
-        return loc, "unknown key", fix, True
+        return loc, "unknown key", fix
     if kind == "missing":
         doc = _field_doc(loc)
         fix = f"add `{loc[-1]}:`" + (f" ({doc})" if doc else "")
-        return loc, "required key is missing", fix, False
+        return loc, "required key is missing", fix
     if kind in ("greater_than", "greater_than_equal", "less_than", "less_than_equal"):
         op = {"greater_than": ">", "greater_than_equal": ">=", "less_than": "<",
               "less_than_equal": "<="}[kind]
         bound = next(iter(ctx.values()))
-        return loc, f"{shown} is out of range", f"give a value {op} {bound:g}", False
-    if kind in ("number_with_unit", "number_type", "float_type", "float_parsing"):
-        msg = err["msg"] if kind.startswith("number") else f"expected a number, got {shown}"
-        return loc, msg, "write a plain number, for example 30 or 1.0e+6", False
+        return loc, f"{shown} is out of range", f"give a value {op} {bound:g}"
+    if kind == "number_with_unit":
+        fix = "write the bare number in the units stated in `units` (angles in degrees)"
+        return loc, err["msg"], fix
+    if kind == "geometry":
+        fix = "use `blocks:` (explicit polygons) or `slope:` (a profile cut by joint sets)"
+        return loc, err["msg"], fix
+    if kind in ("number_type", "float_type", "float_parsing"):
+        msg = err["msg"] if kind == "number_type" else f"expected a number, got {shown}"
+        return loc, msg, "write a plain number, for example 30 or 1.0e+6"
     if kind == "finite_number":
-        return loc, f"{shown} is not a finite number", "give a finite number", False
+        return loc, f"{shown} is not a finite number", "give a finite number"
     if kind in ("int_type", "int_parsing", "int_from_float"):
-        return loc, f"expected a whole number, got {shown}", "write an integer such as 3", False
+        return loc, f"expected a whole number, got {shown}", "write an integer such as 3"
     if kind in ("bool_type", "bool_parsing"):
-        return loc, f"expected true or false, got {shown}", "write true or false", False
+        return loc, f"expected true or false, got {shown}", "write true or false"
     if kind in ("string_type", "string_parsing"):
-        return loc, f"expected text, got {shown}", "write a name in quotes", False
+        return loc, f"expected text, got {shown}", "write a name in quotes"
     if kind == "literal_error":
-        return loc, f"{shown} is not allowed", f"use {ctx.get('expected', '')}", False
+        return loc, f"{shown} is not allowed", f"use {ctx.get('expected', '')}"
     if kind in ("dict_type", "model_type", "model_attributes_type"):
-        return loc, f"expected a mapping of keys, got a {_kind(value)}", "write `key: value` "\
-            "lines indented under it", False
+        fix = "write `key: value` lines indented under it"
+        return loc, f"expected a mapping of keys, got a {_kind(value)}", fix
     if kind in ("list_type", "tuple_type"):
         if _is_point(loc):
-            return loc, f"expected a point [x, y], got a {_kind(value)}", "write [x, y]", False
-        return loc, f"expected a list, got a {_kind(value)}", "write [a, b, ...] or `- ` "\
-            "items", False
+            return loc, f"expected a point [x, y], got a {_kind(value)}", "write [x, y]"
+        return loc, f"expected a list, got a {_kind(value)}", "write [a, b, ...] or `- ` items"
     if kind in ("too_short", "too_long"):
         if _is_point(loc):
-            return loc, f"expected a point [x, y], got {_short(value)}", "write [x, y]", False
+            return loc, f"expected a point [x, y], got {_short(value)}", "write [x, y]"
         n = ctx.get("min_length") if kind == "too_short" else ctx.get("max_length")
         word = "at least" if kind == "too_short" else "at most"
-        return loc, f"has {ctx.get('actual_length')} items", f"give {word} {n}", False
-    if kind in ("value_error", "geometry", "assertion_error"):
+        return loc, f"has {ctx.get('actual_length')} items", f"give {word} {n}"
+    if kind in ("value_error", "assertion_error"):
         msg = err["msg"].removeprefix("Value error, ")
-        return loc, msg, "see `rockdem check --help` and docs/file-format.md", False
-    return loc, err["msg"], "see docs/file-format.md", False
+        return loc, msg, "see `rockdem check --help` and docs/file-format.md"
+    return loc, err["msg"], "see docs/file-format.md"
 
 
 def _is_internal(part: Any) -> bool:
@@ -810,17 +850,15 @@ def _short(value: Any) -> str:
     return text if len(text) <= 40 else text[:37] + "..."
 
 
-def _from_validation(exc: ValidationError, data: dict, source: str, nodes: Any) -> ModelFileError:
+def _from_validation(exc: ValidationError, source: str, nodes: Any) -> ModelFileError:
     errors = exc.errors(include_url=False)
     # report the most specific error first (deepest key path)
     errors.sort(key=lambda e: -len(e["loc"]))
     err = errors[0]
-    loc, problem, fix, at_key = _describe(err, data)
+    loc, problem, fix = _describe(err)
     if len(errors) > 1:
         fix += f" ({len(errors) - 1} more problem{'s' if len(errors) > 2 else ''} in the file)"
-    return ModelFileError(
-        source, _keypath(loc) or "(top level)", problem, fix, _line(nodes, loc, key_line=at_key)
-    )
+    return ModelFileError(source, _keypath(loc) or "(top level)", problem, fix, _line(nodes, loc))
 
 
 # ======================================================== cross-checks
@@ -889,6 +927,12 @@ def _check_references(cfg: ModelFile, source: str, nodes: Any) -> None:
                 fail(loc, f"joint {key!r} is not defined in `joints`", fix)
         if cfg.joint_lines:
             fail(("joint_lines",), "is for explicit blocks", "use `slope.joint_sets` instead")
+        if cfg.default_joint is not None:
+            fail(
+                ("default_joint",),
+                "is for explicit blocks",
+                "generated slopes take each set's joint (and `slope.bridge_joint`)",
+            )
 
 
 # ============================================================= building
@@ -992,14 +1036,14 @@ def build_model(cfg: ModelFile, *, source: str = "<string>", nodes: Any = None):
         mapped to the key path at fault.
     """
     names: dict[str, Loc] = {}
-    ids: list[int] = []
+    ids: dict[int, int] = {}  # block id -> position in `blocks`
     try:
         loads = _loads(cfg, names)
         settings = _settings(cfg)
         joints = _joints(cfg)
         name = cfg.name or Path(source).stem
         if cfg.blocks is not None:
-            model, ids = _explicit_model(cfg, joints, loads, settings, name)
+            model = _explicit_model(cfg, joints, loads, settings, name, ids)
         else:
             model = _slope_model(cfg, joints, loads, settings, name)
         _check_free(model, cfg, source, nodes)
@@ -1025,7 +1069,7 @@ def _check_free(model, cfg: ModelFile, source: str, nodes: Any) -> None:
         )
 
 
-def _explicit_model(cfg: ModelFile, joints, loads, settings, name: str):
+def _explicit_model(cfg: ModelFile, joints, loads, settings, name: str, positions: dict):
     import shapely
 
     from .blocks import Blocks
@@ -1051,7 +1095,7 @@ def _explicit_model(cfg: ModelFile, joints, loads, settings, name: str):
     gamma = [_unit_weight(cfg, b.material, b.unit_weight) for _, b in specs]
     gamma = [0.0 if g is None else g for g in gamma]
     ids = [i if b.id is None else b.id for i, b in specs]
-    positions = [i for i, _ in specs]
+    positions.update(zip(ids, (i for i, _ in specs), strict=True))
     blocks = Blocks.from_polygons(polygons, fixed=fixed, unit_weight=gamma, ids=ids)
     lines = line_joint = None
     if cfg.joint_lines:
@@ -1067,7 +1111,7 @@ def _explicit_model(cfg: ModelFile, joints, loads, settings, name: str):
         settings=settings,
         name=name,
     )
-    return model, dict(zip(ids, positions, strict=True))
+    return model
 
 
 def _profile(spec: ProfileSpec):
@@ -1102,6 +1146,7 @@ def _slope_model(cfg: ModelFile, joints, loads, settings, name: str):
             origin=tuple(js.origin),
             trace_length=js.trace_length,
             gap=js.gap,
+            stagger=js.stagger,
             spacing_sd=js.spacing_sd,
             dip_sd=js.dip_sd,
             seed=js.seed,
@@ -1109,13 +1154,16 @@ def _slope_model(cfg: ModelFile, joints, loads, settings, name: str):
         for name, js in s.joint_sets.items()
     ]
     kw: dict[str, Any] = {
+        "depth": s.depth,
+        "behind": s.behind or None,
         "unit_weight": _unit_weight(cfg, s.material, s.unit_weight),
+        "boundary": tuple(s.boundary),
         "min_block_fraction": s.min_block_fraction,
+        "slivers": s.slivers,
         "seed": s.seed,
     }
-    for key in ("depth", "behind"):
-        if getattr(s, key) is not None:
-            kw[key] = getattr(s, key)
+    if s.ground_thickness is not None:
+        kw["ground_thickness"] = s.ground_thickness
     if cfg.ground_joint is not None:
         kw["ground_joint"] = by_name[cfg.ground_joint]
     if s.bridge_joint is not None:
@@ -1134,19 +1182,24 @@ _BLOCK = re.compile(r"^blocks? (-?\d+)")
 
 
 def _from_engine(
-    exc: InputError, cfg: ModelFile, ids: Any, names: dict[str, Loc], source: str, nodes: Any
+    exc: InputError,
+    cfg: ModelFile,
+    ids: dict[int, int],
+    names: dict[str, Loc],
+    source: str,
+    nodes: Any,
 ) -> ModelFileError:
     """Map an engine InputError back to the key path of the file."""
     where = exc.where
     loc: Loc = ()
     m = _BLOCK.match(where)
-    if cfg.blocks is not None and m and isinstance(ids, dict) and int(m.group(1)) in ids:
+    if cfg.blocks is not None and m and int(m.group(1)) in ids:
         loc = ("blocks", ids[int(m.group(1))])
         label = where
     elif where in names:
         loc, label = names[where], ""
     elif cfg.slope is not None:
-        loc, label = ("slope",), where
+        loc, label = ("slope",), ("" if where == "slope" else where)
     else:
         label = where
     problem = f"{label} {exc.problem}".strip() if label else exc.problem
