@@ -460,15 +460,22 @@ def schema(
     out_file: Annotated[
         Path | None, typer.Option("--out", "-o", help="Write to this file instead of stdout.")
     ] = None,
+    debug: DebugOpt = False,
 ) -> None:
     """Print the JSON Schema of model files (for editor completion)."""
-    from .config import json_schema
+    with _guard(debug):
+        from .config import json_schema
+        from .errors import InputError
 
-    text = json.dumps(json_schema(), indent=2) + "\n"
-    if out_file is None:
-        typer.echo(text, nl=False)
-    else:
-        out_file.write_text(text, encoding="utf-8")
+        text = json.dumps(json_schema(), indent=2) + "\n"
+        if out_file is None:
+            typer.echo(text, nl=False)
+            return
+        try:
+            out_file.write_text(text, encoding="utf-8")
+        except OSError as exc:
+            raise InputError(f"--out {out_file}", f"cannot be written ({exc.strerror})",
+                             "give a file in an existing folder") from None
 
 
 # ----------------------------------------------------------------- example

@@ -139,8 +139,11 @@ def _integer(value: Any) -> Any:
     return value
 
 
-Number = Annotated[float, BeforeValidator(_number), Field(allow_inf_nan=False)]
-Integer = Annotated[int, BeforeValidator(_integer)]
+_AS_NUMBER = BeforeValidator(_number)
+_AS_INTEGER = BeforeValidator(_integer)
+# constraints go before the validators, so that the JSON Schema shows them
+Number = Annotated[float, Field(allow_inf_nan=False), _AS_NUMBER]
+Integer = Annotated[int, _AS_INTEGER]
 Point = Annotated[
     tuple[Number, Number],
     Field(description="A point `[x, y]` (x to the right, y up)."),
@@ -153,8 +156,11 @@ Polygon = Annotated[
         "not closed).",
     ),
 ]
-Angle = Annotated[Number, Field(ge=0.0, lt=90.0)]
-Dip = Annotated[Number, Field(ge=0.0, lt=180.0)]
+Angle = Annotated[float, Field(ge=0.0, lt=90.0, allow_inf_nan=False), _AS_NUMBER]
+Positive = Annotated[float, Field(gt=0.0, allow_inf_nan=False), _AS_NUMBER]
+NonNegative = Annotated[float, Field(ge=0.0, allow_inf_nan=False), _AS_NUMBER]
+Fraction = Annotated[float, Field(ge=0.0, lt=1.0, allow_inf_nan=False), _AS_NUMBER]
+Dip = Annotated[float, Field(ge=0.0, lt=180.0, allow_inf_nan=False), _AS_NUMBER]
 
 
 class _Section(BaseModel):
@@ -167,7 +173,7 @@ class _Section(BaseModel):
 class MaterialSpec(_Section):
     """A rock material (referred to by name from blocks and slopes)."""
 
-    unit_weight: Annotated[Number, Field(ge=0.0)]
+    unit_weight: NonNegative
     """Weight per unit volume x the section's thickness (for example 26 kN/m^3 for a
     1 m slice); weight = unit_weight x block area."""
     description: str = ""
@@ -177,20 +183,20 @@ class MaterialSpec(_Section):
 class JointSpec(_Section):
     """Strength and stiffness of one kind of interface (joint set, rock bridge, ground)."""
 
-    normal_stiffness: Annotated[Number, Field(gt=0.0)]
+    normal_stiffness: Positive
     """kn: normal stiffness per unit length per unit closure (for example kN/m^2/m).
     Choose it large against the loads; its value hardly changes collapse results."""
     friction_angle: Angle
     """Peak friction angle in degrees, 0 <= phi < 90."""
-    cohesion: Annotated[Number, Field(ge=0.0)] = 0.0
+    cohesion: NonNegative = 0.0
     """Peak cohesion (stress), >= 0."""
-    tensile_strength: Annotated[Number, Field(ge=0.0)] = 0.0
+    tensile_strength: NonNegative = 0.0
     """Tension cut-off (stress), >= 0; 0 means an open joint that carries no tension."""
-    shear_stiffness: Annotated[Number, Field(gt=0.0)] | None = None
+    shear_stiffness: Positive | None = None
     """ks; default normal_stiffness / stiffness_ratio."""
-    stiffness_ratio: Annotated[Number, Field(gt=0.0)] = 2.5
+    stiffness_ratio: Positive = 2.5
     """kn / ks used when shear_stiffness is not given (2 to 3 for rock)."""
-    residual_cohesion: Annotated[Number, Field(ge=0.0)] | None = 0.0
+    residual_cohesion: NonNegative | None = 0.0
     """Cohesion after a point has yielded; default 0 (brittle). null keeps the peak
     cohesion (ductile)."""
     residual_friction_angle: Angle | None = None
@@ -208,7 +214,7 @@ class BlockSpec(_Section):
     """True for immobile ground (no unit weight needed)."""
     material: str | None = None
     """Name of a material in `materials` (gives the unit weight)."""
-    unit_weight: Annotated[Number, Field(ge=0.0)] | None = None
+    unit_weight: NonNegative | None = None
     """Unit weight of this block (instead of `material`)."""
     id: Integer | None = None
     """Label reported in results; default the block's position in the list (0, 1, ...)."""
@@ -257,18 +263,20 @@ class ProfileSpec(_Section):
 
     points: list[Point] | None = Field(default=None, min_length=2)
     """Surface points `[[x, y], ...]` from left (crest side) to right (toe side)."""
-    height: Annotated[Number, Field(gt=0.0)] | None = None
+    height: Positive | None = None
     """Simple slope: height from toe to crest."""
-    face_angle: Annotated[Number, Field(gt=0.0, le=90.0)] | None = None
+    face_angle: (
+        Annotated[float, Field(gt=0.0, le=90.0, allow_inf_nan=False), _AS_NUMBER] | None
+    ) = None
     """Simple slope: inclination of the face in degrees (0 < angle <= 90)."""
-    crest_length: Annotated[Number, Field(gt=0.0)] | None = None
+    crest_length: Positive | None = None
     """Simple slope: length of the flat ground behind the crest (default: the height)."""
-    toe_length: Annotated[Number, Field(gt=0.0)] | None = None
+    toe_length: Positive | None = None
     """Simple slope: length of the flat ground in front of the toe (default: half the
     height)."""
-    bench_width: Annotated[Number, Field(ge=0.0)] = 0.0
+    bench_width: NonNegative = 0.0
     """Simple slope: width of benches (0: no benches)."""
-    bench_height: Annotated[Number, Field(gt=0.0)] | None = None
+    bench_height: Positive | None = None
     """Simple slope: vertical distance between benches, counted up from the toe
     (needed when bench_width > 0)."""
     toe: Point = (0.0, 0.0)
@@ -290,23 +298,23 @@ class JointSetSpec(_Section):
     dip: Dip
     """Dip in degrees, 0 <= dip < 180 (trace along (cos dip, -sin dip); dip < 90 dips
     out of the face)."""
-    spacing: Annotated[Number, Field(gt=0.0)]
+    spacing: Positive
     """Mean distance between joints, measured normal to them."""
     joint: str | None = None
     """Name of the joint properties in `joints`; default the set's own name."""
     origin: Point = (0.0, 0.0)
     """A point one joint of the set passes through."""
-    trace_length: Annotated[Number, Field(gt=0.0)] | None = None
+    trace_length: Positive | None = None
     """Length of each joint trace (null: persistent joints across the slope)."""
-    gap: Annotated[Number, Field(ge=0.0)] = 0.0
+    gap: NonNegative = 0.0
     """Length of the rock bridges between traces of non-persistent joints (needs
     `slope.bridge_joint`)."""
-    stagger: Annotated[Number, Field(ge=0.0, le=1.0)] = 0.0
+    stagger: Annotated[float, Field(ge=0.0, le=1.0, allow_inf_nan=False), _AS_NUMBER] = 0.0
     """Shift of the trace pattern from one joint to the next, as a fraction of
     trace_length + gap."""
-    spacing_sd: Annotated[Number, Field(ge=0.0)] = 0.0
+    spacing_sd: NonNegative = 0.0
     """Standard deviation of the spacing (0: regular)."""
-    dip_sd: Annotated[Number, Field(ge=0.0)] = 0.0
+    dip_sd: NonNegative = 0.0
     """Standard deviation of the dip in degrees (0: all parallel)."""
     seed: Integer | None = None
     """Random seed of this set (default: from `slope.seed`)."""
@@ -321,21 +329,21 @@ class SlopeSpec(_Section):
     """Joint sets by name (at least one)."""
     material: str | None = None
     """Material of the rock mass (default: the only one in `materials`)."""
-    unit_weight: Annotated[Number, Field(ge=0.0)] | None = None
+    unit_weight: NonNegative | None = None
     """Unit weight of the rock mass (instead of `material`)."""
-    depth: Annotated[Number, Field(gt=0.0)]
+    depth: Positive
     """Depth of the modelled rock below the lowest profile point."""
-    behind: Annotated[Number, Field(ge=0.0)] = 0.0
+    behind: NonNegative = 0.0
     """Horizontal ground added behind (left of) the profile's first point."""
     boundary: list[Literal["base", "back", "front"]] = ["base", "back", "front"]
     """Sides of the section backed by a fixed strip of ground ([] for none)."""
-    ground_thickness: Annotated[Number, Field(gt=0.0)] | None = None
+    ground_thickness: Positive | None = None
     """Thickness of the fixed strips (default 10% of the larger section size)."""
     bridge_joint: str | None = None
     """Joint (name in `joints`) for the rock bridges between non-persistent joints."""
     fixed_region: Polygon | None = None
     """Region of the section that is fixed ground (besides the `boundary` strips)."""
-    min_block_fraction: Annotated[Number, Field(ge=0.0, lt=1.0)] = 0.05
+    min_block_fraction: Fraction = 0.05
     """Blocks smaller than this fraction of the median block area are slivers."""
     slivers: Literal["merge", "report"] = "merge"
     """Merge each sliver into the neighbour sharing its longest edge, or keep it and
@@ -383,9 +391,9 @@ class LoadsSpec(_Section):
 
     gravity: bool = True
     """Apply the self-weight of the blocks."""
-    seismic_h: Annotated[Number, Field(gt=-1.0, lt=1.0)] = 0.0
+    seismic_h: Annotated[float, Field(gt=-1.0, lt=1.0, allow_inf_nan=False), _AS_NUMBER] = 0.0
     """Pseudo-static horizontal coefficient kh: a force kh x W toward +x (out of the face)."""
-    seismic_v: Annotated[Number, Field(gt=-1.0, lt=1.0)] = 0.0
+    seismic_v: Annotated[float, Field(gt=-1.0, lt=1.0, allow_inf_nan=False), _AS_NUMBER] = 0.0
     """Pseudo-static vertical coefficient kv: a force kv x W downward."""
     points: list[PointLoadSpec] = []
     """Point loads."""
@@ -398,7 +406,7 @@ class SupportSpec(_Section):
 
     at: Point
     """Point of application on the face `[x, y]`."""
-    force: Annotated[Number, Field(gt=0.0)]
+    force: Positive
     """Magnitude of the support force."""
     angle: Number
     """Direction in degrees counter-clockwise from +x (for example 165 pulls into a
@@ -410,15 +418,15 @@ class SupportSpec(_Section):
 class StrengthReductionSpec(_Section):
     """Settings of the factor of safety by strength reduction (`rockdem fos`)."""
 
-    width: Annotated[Number, Field(gt=0.0)] = 0.005
+    width: Positive = 0.005
     """Stop when the bracket [stable, unstable] is narrower than this."""
-    start: Annotated[Number, Field(gt=0.0)] = 1.0
+    start: Positive = 1.0
     """First trial factor."""
-    grow: Annotated[Number, Field(gt=1.0)] = 1.5
+    grow: Annotated[float, Field(gt=1.0, allow_inf_nan=False), _AS_NUMBER] = 1.5
     """Factor between trials while no failure has been found."""
-    smallest: Annotated[Number, Field(gt=0.0)] = 0.05
+    smallest: Positive = 0.05
     """Give up (strength-independent mechanism) below this factor."""
-    largest: Annotated[Number, Field(gt=0.0)] = 100.0
+    largest: Positive = 100.0
     """Give up (no failure) above this factor."""
 
     @model_validator(mode="after")
@@ -434,13 +442,13 @@ class AnalysisSpec(_Section):
     quadrature: Literal["lobatto", "gauss"] = "lobatto"
     """Spring point rule along each interface: lobatto (includes the ends, exact
     pivoting) or gauss (2 points = the seed paper's lumped springs)."""
-    points_per_interface: Annotated[Integer, Field(ge=2, le=5)] = 3
+    points_per_interface: Annotated[int, Field(ge=2, le=5), _AS_INTEGER] = 3
     """Spring points per interface (3 with lobatto is Simpson's rule)."""
-    load_steps: Annotated[Integer, Field(ge=1)] = 5
+    load_steps: Annotated[int, Field(ge=1), _AS_INTEGER] = 5
     """Increments in which the loads are applied (staged gravity)."""
-    tolerance: Annotated[Number, Field(gt=0.0, lt=1e-2)] = 1e-8
+    tolerance: Annotated[float, Field(gt=0.0, lt=1e-2, allow_inf_nan=False), _AS_NUMBER] = 1e-8
     """Equilibrium when the out-of-balance force is below tolerance x the external force."""
-    max_iterations: Annotated[Integer, Field(ge=1)] = 60
+    max_iterations: Annotated[int, Field(ge=1), _AS_INTEGER] = 60
     """Newton iterations per solve before a step is declared failed."""
     reduce_tensile: bool = True
     """Divide the tensile strength by the trial factor in strength reduction too."""

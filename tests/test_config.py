@@ -1,0 +1,317 @@
+"""Model files: the format, its defaults, its schema, and the model it builds."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+import rockdem as rd
+from rockdem.config import (
+    AnalysisSpec,
+    JointSpec,
+    ModelFile,
+    ModelFileError,
+    json_schema,
+    load_model,
+    parse_model,
+)
+from rockdem.examples import example_path, list_examples
+
+ROOT = Path(__file__).resolve().parents[1]
+
+BOX = """
+units: kN, m, kPa
+materials: {rock: {unit_weight: 25}}
+joints:
+  bedding: {normal_stiffness: 1.0e+6, friction_angle: 30}
+blocks:
+  - {fixed: true, vertices: [[-5, -1], [5, -1], [5, 0], [-5, 0]]}
+  - {material: rock, vertices: [[0, 0], [2, 0], [2, 1], [0, 1]]}
+"""
+
+BOX_TOML = """
+units = "kN, m, kPa"
+[materials.rock]
+unit_weight = 25
+[joints.bedding]
+normal_stiffness = 1.0e6
+friction_angle = 30
+[[blocks]]
+fixed = true
+vertices = [[-5, -1], [5, -1], [5, 0], [-5, 0]]
+[[blocks]]
+material = "rock"
+vertices = [[0, 0], [2, 0], [2, 1], [0, 1]]
+"""
+
+
+def test_minimal_file_builds_the_expected_model():
+    model, cfg = parse_model(BOX, source="box.yaml")
+    assert model.blocks.n_blocks == 2
+    assert model.blocks.fixed.tolist() == [True, False]
+    assert model.blocks.weight[1] == pytest.approx(50.0)
+    assert model.joints[0].name == "bedding"
+    assert cfg.units == "kN, m, kPa"
+    assert rd.analyse(model).stable
+
+
+def test_toml_and_yaml_give_the_same_model():
+    a, cfg_a = parse_model(BOX, source="box.yaml")
+    b, cfg_b = parse_model(BOX_TOML, fmt="toml", source="box.toml")
+    assert cfg_a == cfg_b
+    assert np.array_equal(a.blocks.vertices, b.blocks.vertices)
+    assert a.joints == b.joints
+
+
+def test_toml_file_is_read_by_suffix(tmp_path):
+    path = tmp_path / "box.toml"
+    path.write_text(BOX_TOML)
+    model, cfg = load_model(path)
+    assert model.name == "box" and cfg.name == "box"
+    assert model.blocks.n_blocks == 2
+
+
+def test_defaults_match_the_engine():
+    """A file that leaves a key out gets the engine's own default."""
+    spec = AnalysisSpec()
+    engine = rd.Settings()
+    for f in dataclasses.fields(engine):
+        assert getattr(spec, f.name) == getattr(engine, f.name), f.name
+    joint = JointSpec(normal_stiffness=1e6, friction_angle=30)
+    ref = rd.Joint(normal_stiffness=1e6, friction_angle=30)
+    for key in ("cohesion", "tensile_strength", "residual_cohesion", "stiffness_ratio"):
+        assert getattr(joint, key) == getattr(ref, key), key
+    sr = spec.strength_reduction
+    import inspect
+
+    params = inspect.signature(rd.factor_of_safety).parameters
+    for key in ("width", "start", "grow", "smallest", "largest"):
+        assert getattr(sr, key) == params[key].default, key
+
+
+def test_engine_defaults_of_loads():
+    model, _ = parse_model(BOX)
+    assert model.loads == rd.Loads()
+
+
+def test_residual_cohesion_null_means_ductile():
+    text = BOX.replace("friction_angle: 30}", "friction_angle: 30, cohesion: 5, "
+                       "residual_cohesion: null}")
+    model, _ = parse_model(text)
+    assert model.joints[0].residual_cohesion == 5
+
+
+def test_wedge_example_has_the_papers_weights_and_joints():
+    model, cfg = load_model(example_path("wedge-verification"))
+    free = ~model.blocks.fixed
+    assert sorted(model.blocks.weight[free].tolist()) == pytest.approx([75.0, 200.0], rel=1e-12)
+    system = rd.build_system(model)
+    names = [model.joints[j].name for j in system.interfaces.joint]
+    assert sorted(names) == ["lower", "upper", "vertical"]
+    # the upper plane is under the 200 t block, the lower one under the 75 t block
+    ids = model.blocks.ids
+    for k, name in enumerate(names):
+        pair = {int(ids[system.interfaces.block_a[k]]), int(ids[system.interfaces.block_b[k]])}
+        assert pair == {"upper": {0, 1}, "lower": {0, 2}, "vertical": {1, 2}}[name]
+    assert cfg.units.startswith("t, m")
+
+
+def test_wedge_example_matches_limit_equilibrium():
+    from rockdem.verification import wedge_fos, wedge_thrust
+
+    model, cfg = load_model(example_path("wedge-verification"))
+    assert wedge_thrust(200, 75, 37, 27, 35, 30, 35) == pytest.approx(2.64, abs=0.005)
+    assert not rd.analyse(model).stable
+    fos = rd.factor_of_safety(model, width=cfg.analysis.strength_reduction.width)
+    lo, hi = fos.bracket
+    assert lo <= wedge_fos(200, 75, 37, 27, 35, 30, 35) <= hi
+    assert hi - lo <= 0.002
+
+
+def test_every_example_loads_and_checks():
+    assert "wedge-verification" in list_examples()
+    for name in list_examples():
+        try:
+            model, _ = load_model(example_path(name))
+        except ModelFileError as exc:  # profile examples need rockdem.geometry
+            if "rockdem.geometry" in str(exc):
+                pytest.skip("geometry module not available yet")
+            raise
+        assert (~model.blocks.fixed).any()
+
+
+def test_joint_line_by_point_and_dip_assigns_interfaces():
+    text = BOX + """
+  - {material: rock, vertices: [[0, 1], [2, 1], [2, 2], [0, 2]]}
+joints:
+  default: {normal_stiffness: 1.0e+6, friction_angle: 40}
+  bedding: {normal_stiffness: 1.0e+6, friction_angle: 30}
+joint_lines:
+  - {joint: bedding, point: [100, 1], dip: 0}
+"""
+    text = text.replace("joints:\n  bedding: {normal_stiffness: 1.0e+6, friction_angle: 30}\n"
+                        "blocks:", "blocks:", 1)
+    model, _ = parse_model(text)
+    system = rd.build_system(model)
+    kinds = {
+        (int(a), int(b)): model.joints[j].name
+        for a, b, j in zip(system.interfaces.block_a, system.interfaces.block_b,
+                           system.interfaces.joint, strict=True)
+    }
+    assert kinds == {(0, 1): "default", (1, 2): "bedding"}
+
+
+def test_default_and_ground_joint():
+    text = BOX.replace(
+        "joints:\n", "ground_joint: base\ndefault_joint: other\njoints:\n"
+        "  base: {normal_stiffness: 1.0e+6, friction_angle: 10}\n"
+        "  other: {normal_stiffness: 1.0e+6, friction_angle: 20}\n"
+    )
+    model, _ = parse_model(text)
+    assert model.joints[0].name == "other"
+    assert model.joints[model.ground].name == "base"
+
+
+# engine issue (loads.py): shapely 2.1 deprecates the positional `normalized`
+@pytest.mark.filterwarnings("ignore:positional argument `normalized`:DeprecationWarning")
+def test_supports_and_loads():
+    text = BOX + """
+loads:
+  seismic_h: 0.1
+  points: [{at: [1, 1], force: [0, -10], name: crane}]
+  lines: [{start: [0, 1], end: [2, 1], q: [0, -5]}]
+supports:
+  - {at: [2, 0.5], force: 100, angle: 180, name: bolt}
+"""
+    model, _ = parse_model(text)
+    loads = model.loads
+    assert loads.seismic_h == 0.1
+    crane, bolt = loads.points
+    assert (crane.fx, crane.fy, crane.support, crane.name) == (0, -10, False, "crane")
+    assert bolt.support and bolt.fx == pytest.approx(-100) and abs(bolt.fy) < 1e-9
+    assert loads.lines[0].qy == -5 and loads.lines[0].name == "loads.lines[0]"
+
+
+def test_removal_by_id_and_region():
+    text = BOX + """
+  - {id: 7, material: rock, vertices: [[2, 0], [4, 0], [4, 1], [2, 1]]}
+  - {id: 8, material: rock, vertices: [[-2, 0], [0, 0], [0, 1], [-2, 1]]}
+remove:
+  blocks: [7]
+  regions: [[[-3, -0.5], [-0.5, -0.5], [-0.5, 3], [-3, 3]]]
+"""
+    model, _ = parse_model(text)
+    assert sorted(model.blocks.ids.tolist()) == [0, 1]
+
+
+def test_name_defaults_to_file_stem_and_can_be_given(tmp_path):
+    path = tmp_path / "my-slope.yaml"
+    path.write_text(BOX)
+    assert load_model(path)[0].name == "my-slope"
+    path.write_text("name: Quarry A\n" + BOX)
+    assert load_model(path)[0].name == "Quarry A"
+
+
+def test_yaml_1e6_string_is_read_as_a_number():
+    model, _ = parse_model(BOX.replace("1.0e+6", "1e6"))
+    assert model.joints[0].normal_stiffness == 1e6
+
+
+def test_error_names_file_line_key_and_fix():
+    text = BOX.replace("friction_angle: 30", "friction_angle: 95")
+    with pytest.raises(ModelFileError) as info:
+        parse_model(text, source="slope.yaml")
+    exc = info.value
+    assert exc.source == "slope.yaml" and exc.line == 5
+    assert exc.key == "joints.bedding.friction_angle"
+    assert str(exc) == ("slope.yaml:5: joints.bedding.friction_angle: 95 is out of range; "
+                        "give a value < 90")
+    assert isinstance(exc, rd.InputError)
+
+
+def test_error_counts_further_problems():
+    text = BOX.replace("friction_angle: 30", "friction_angle: 95, cohesion: -1")
+    with pytest.raises(ModelFileError, match=r"1 more problem in the file"):
+        parse_model(text)
+
+
+def test_missing_file():
+    with pytest.raises(ModelFileError, match=r"nope\.yaml: file not found"):
+        load_model("nope.yaml")
+
+
+# ------------------------------------------------------------------ schema
+def test_published_schema_is_up_to_date():
+    """schema/rockdem-model.schema.json is generated: `rockdem schema -o ...`."""
+    published = json.loads((ROOT / "schema" / "rockdem-model.schema.json").read_text())
+    assert published == json.loads(json.dumps(json_schema()))
+
+
+def _properties(schema):
+    yield "", schema.get("properties", {})
+    for name, sub in schema.get("$defs", {}).items():
+        yield name, sub.get("properties", {})
+
+
+def test_every_key_is_documented_in_the_schema():
+    schema = json_schema()
+    for owner, props in _properties(schema):
+        for key, prop in props.items():
+            assert prop.get("description"), f"{owner}.{key} has no description"
+
+
+def test_every_key_is_in_the_format_document():
+    doc = (ROOT / "docs" / "file-format.md").read_text()
+    for _owner, props in _properties(json_schema()):
+        for key in props:
+            assert f"`{key}`" in doc, key
+
+
+def test_the_format_documents_complete_example_is_valid(tmp_path):
+    """The first ```yaml block of docs/file-format.md is a complete, valid model."""
+    doc = (ROOT / "docs" / "file-format.md").read_text()
+    block = doc.split("```yaml\n", 1)[1].split("```", 1)[0]
+    path = tmp_path / "example.yaml"
+    path.write_text(block)
+    model, cfg = load_model(path)
+    assert model.blocks.n_blocks >= 2 and cfg.units
+
+
+def test_schema_rejects_what_the_models_reject():
+    schema = json_schema()
+    joint = schema["$defs"]["JointSpec"]
+    assert joint["additionalProperties"] is False
+    assert set(joint["required"]) == {"normal_stiffness", "friction_angle"}
+    angle = joint["properties"]["friction_angle"]
+    assert angle.get("exclusiveMaximum") == 90
+
+
+# -------------------------------------------------------------- robustness
+SCALARS = st.one_of(
+    st.none(), st.booleans(), st.integers(-10**6, 10**6),
+    st.floats(allow_nan=True, allow_infinity=True), st.text(max_size=12),
+    st.lists(st.integers(-3, 3), max_size=3),
+)
+
+
+@settings(max_examples=60, deadline=None)
+@given(value=SCALARS, key=st.sampled_from(
+    ["friction_angle", "normal_stiffness", "cohesion", "tensile_strength", "stiffness_ratio"]))
+def test_any_value_either_builds_or_gives_a_keyed_error(value, key):
+    data = ModelFile.model_validate  # noqa: F841 - the validator is exercised through the text
+    text = BOX.replace("friction_angle: 30}", "friction_angle: 30, " + key + ": "
+                       + json.dumps(value, allow_nan=True).replace("NaN", ".nan")
+                       .replace("-Infinity", "-.inf").replace("Infinity", ".inf") + "}")
+    if key == "friction_angle":
+        text = text.replace("friction_angle: 30, ", "", 1)
+    try:
+        parse_model(text, source="f.yaml")
+    except ModelFileError as exc:
+        assert str(exc).startswith("f.yaml:")
+        assert f"joints.bedding.{key}" in str(exc) or "not valid YAML" in str(exc)
