@@ -250,7 +250,7 @@ def _check_summary(path: Path, m, cfg, system) -> dict[str, Any]:
             "point_loads": sum(not p.support for p in loads.points),
             "supports": sum(p.support for p in loads.points),
             "line_loads": len(loads.lines),
-            "resultant": [float(v) for v in np.sum(system.f_block[:, :2], axis=0)],
+            "resultant": [float(v) for v in np.sum(system.f_block[free, :2], axis=0)],
         },
         "analysis": cfg.analysis.model_dump(mode="json"),
     }
@@ -279,7 +279,7 @@ def _print_check(s: dict[str, Any]) -> None:
     out.print(
         f"loads: gravity {'on' if ld['gravity'] else 'off'}, kh {ld['seismic_h']:g}, "
         f"kv {ld['seismic_v']:g}, {ld['point_loads']} point, {ld['line_loads']} line, "
-        f"{ld['supports']} supports; resultant ({ld['resultant'][0]:.6g}, "
+        f"{ld['supports']} supports; resultant on free blocks ({ld['resultant'][0]:.6g}, "
         f"{ld['resultant'][1]:.6g})"
     )
     a = s["analysis"]
