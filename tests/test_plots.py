@@ -157,9 +157,12 @@ def test_mechanism_for_unstable(unstable):
     ax = plots.plot_deformed(unstable)
     assert "mechanism" in ax.get_title().lower()
     q = next(c for c in ax.collections if isinstance(c, Quiver))
-    free = ~unstable.system.blocks.fixed
+    moving = unstable.unstable & ~unstable.system.blocks.fixed
     mag = plots.auto_magnification(unstable.system.blocks, unstable.mechanism)
-    assert np.allclose(q.U, mag * unstable.mechanism[free, 0])
+    mech = plots.oriented_mechanism(unstable)
+    assert np.allclose(q.U, mag * mech[moving, 0])
+    # the blocks fall: gravity does positive work on the drawn mechanism
+    assert np.all(mech[moving, 1] <= 0) and np.sum(unstable.system.f_block * mech) > 0
 
 
 def test_stress_along_joint(analysis):

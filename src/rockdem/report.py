@@ -153,8 +153,9 @@ def _unstable_table(a: Analysis, limit: int) -> str:
         return '<p class="note">No block moves (no failure mechanism).</p>'
     size = np.sqrt(np.abs(blocks.area))
     rows = []
+    mech = plots.oriented_mechanism(a)
     for i in idx[:limit]:
-        ux, uy, rot = a.mechanism[i]
+        ux, uy, rot = mech[i]
         turn = abs(rot) * size[i]
         mode = "rotating" if turn > np.hypot(ux, uy) else "sliding"
         rows.append(

@@ -11,7 +11,7 @@ Colours are the Okabe-Ito colour-blind-safe palette; shear failure is red
 >>> plot_failure(rockdem.analyse(model)).figure.savefig("failure.png")  # doctest: +SKIP
 """
 
-from ._common import JOINT_COLORS, OKABE_ITO, STATE_COLORS, STATE_LABELS
+from ._common import JOINT_COLORS, OKABE_ITO, STATE_COLORS, STATE_LABELS, oriented_mechanism
 from .figure import WHAT, make_figure, plot_figure
 from .fos import max_displacement, plot_fos, trial_displacements
 from .model import plot_model
@@ -33,6 +33,7 @@ __all__ = [
     "joint_path",
     "make_figure",
     "max_displacement",
+    "oriented_mechanism",
     "plot_deformed",
     "plot_failure",
     "plot_figure",

@@ -189,6 +189,20 @@ def motion_size(blocks, motion: np.ndarray) -> np.ndarray:
     return size
 
 
+def oriented_mechanism(a) -> np.ndarray:
+    """The failure mechanism of an analysis, signed so that the loads do positive work.
+
+    A direction of motion is defined up to its sign; the engine's Newton
+    step can point either way, and the blocks fall the way gravity (and the
+    other loads) pushes them.
+    """
+    mech = np.asarray(a.mechanism, dtype=float)
+    f = getattr(a.system, "f_block", None)
+    if f is not None and np.sum(np.asarray(f) * mech) < 0:
+        return -mech
+    return mech
+
+
 def segments(system: System, which=None) -> np.ndarray:
     """Interface segments ``(n, 2, 2)`` (all, or those indexed by ``which``)."""
     f = system.interfaces

@@ -176,7 +176,7 @@ def plot_fos(
     ]
     if fos.value is not None:
         handles.append(Line2D([], [], color=c.OKABE_ITO["blue"], ls="--", label="F of S"))
-    ax.legend(handles=handles, loc="center left", fontsize=7, framealpha=0.9)
+    ax.legend(handles=handles, loc="lower right", fontsize=7, framealpha=0.9)
     if source == "recomputed":
         ax.text(
             0.01,

@@ -2,8 +2,10 @@
 
 from __future__ import annotations
 
+import matplotlib
 import numpy as np
 from matplotlib.axes import Axes
+from matplotlib.cm import ScalarMappable
 from matplotlib.collections import LineCollection, PolyCollection
 from matplotlib.colors import Normalize
 from matplotlib.lines import Line2D
@@ -18,7 +20,7 @@ def _motion(a, use: str) -> tuple[np.ndarray, str]:
     if use == "displacement":
         return a.displacement, "displacement"
     if use == "mechanism":
-        return a.mechanism, "mechanism"
+        return c.oriented_mechanism(a), "mechanism"
     raise ValueError(f"use must be 'auto', 'displacement' or 'mechanism', not {use!r}")
 
 
@@ -57,7 +59,8 @@ def plot_deformed(
     use : {"auto", "displacement", "mechanism"}
         ``"auto"``: the displacements of a stable analysis, the failure
         mechanism (direction of motion, largest = 1) of an unstable one,
-        because displacements after failure mean nothing.
+        because displacements after failure mean nothing.  The mechanism is
+        signed so that the loads do positive work on it.
     vectors, colormap : bool
         Draw displacement arrows; colour the blocks by motion magnitude.
     unit : str
@@ -67,7 +70,8 @@ def plot_deformed(
     -------
     Axes
         PolyCollection ``"deformed"`` (free blocks, moved), LineCollection
-        ``"original"`` (undeformed outlines), Quiver ``"vectors"``.
+        ``"original"`` (undeformed outlines), Quiver ``"vectors"`` (one arrow
+        per free block; for a mechanism, per unstable block).
     """
     a = c.as_analysis(result)
     blocks = a.system.blocks
@@ -86,11 +90,20 @@ def plot_deformed(
         gid="deformed",
         label=f"moved x{mag:g}",
     )
-    if colormap:
-        top = float(size[free].max()) if free.any() else 0.0
+    top = float(size[free].max()) if free.any() else 0.0
+    norm = Normalize(0.0, top if top > 0 else 1.0)
+    moving = a.unstable if kind == "mechanism" else np.ones(blocks.n_blocks, dtype=bool)
+    mappable = deformed
+    if colormap and kind == "displacement":
         deformed.set_array(size[free])
         deformed.set_cmap(c.CMAP)
-        deformed.set_norm(Normalize(0.0, top if top > 0 else 1.0))
+        deformed.set_norm(norm)
+    elif colormap:
+        # only the moving blocks are coloured; the rest stay rock-coloured
+        cmap = matplotlib.colormaps[c.CMAP]
+        faces = [cmap(norm(size[i])) if moving[i] else c.ROCK_FACE for i in np.flatnonzero(free)]
+        deformed.set_facecolor(faces)
+        mappable = ScalarMappable(norm=norm, cmap=cmap)
     else:
         deformed.set_facecolor(c.ROCK_FACE)
     ax.add_collection(deformed)
@@ -100,9 +113,10 @@ def plot_deformed(
             closed, colors="#555555", linewidths=0.6, linestyles="--", zorder=3, gid="original"
         )
     )
-    if vectors and free.any():
-        cen = blocks.centroid[free]
-        u = motion[free, :2] * mag
+    arrows = free & moving
+    if vectors and arrows.any():
+        cen = blocks.centroid[arrows]
+        u = motion[arrows, :2] * mag
         q = ax.quiver(
             cen[:, 0],
             cen[:, 1],
@@ -124,7 +138,7 @@ def plot_deformed(
     ax.set_xlim(lo[0] - pad, hi[0] + pad)
     ax.set_ylim(lo[1] - pad, hi[1] + pad)
     if colormap and free.any():
-        cb = ax.figure.colorbar(deformed, ax=ax, shrink=0.8)
+        cb = ax.figure.colorbar(mappable, ax=ax, shrink=0.8)
         cb.set_label(
             f"displacement ({unit})"
             if kind == "displacement"

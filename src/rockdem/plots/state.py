@@ -45,8 +45,10 @@ class Frame:
 
     @property
     def label(self) -> str:
-        """A short caption, for example ``"stage 3: load x0.6, F = 1"``."""
-        text = f"stage {self.stage}: load x{self.load_factor:.3g}, F = {self.strength_factor:.4g}"
+        """A short caption, for example ``"step 3: load x0.6, F = 1"``."""
+        text = (
+            f"step {self.index + 1}: load x{self.load_factor:.3g}, F = {self.strength_factor:.4g}"
+        )
         return text if self.converged else text + " (no equilibrium)"
 
 
