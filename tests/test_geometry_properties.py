@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import shapely
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
 import rockdem as rd
@@ -58,8 +58,14 @@ def slopes(draw):
 
 
 def build(p, sets, depth, frac, seed):
-    return generate_slope(p, sets, depth=depth, bridge_joint=BRIDGE, ground_joint=GROUND,
-                          min_block_fraction=frac, seed=seed)
+    try:
+        return generate_slope(p, sets, depth=depth, bridge_joint=BRIDGE, ground_joint=GROUND,
+                              min_block_fraction=frac, seed=seed)
+    except rd.InputError as exc:
+        # a wide set may legitimately miss a small section (or only graze its outline)
+        assert exc.where.startswith("joint set") and (
+            "misses the section" in exc.problem or "no trace" in exc.problem)
+        assume(False)
 
 
 @SETTINGS

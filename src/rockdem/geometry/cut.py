@@ -311,14 +311,21 @@ def _arrangement(section: shapely.Polygon, segs: np.ndarray, extent: float) -> n
     lines = shapely.linestrings(segs)
     clipped = shapely.intersection(lines, big)
     parts = shapely.get_parts(clipped)
-    parts = parts[shapely.get_type_id(parts) == 1]
+    # keep non-empty line pieces only (GEOS node crashes on empty parts)
+    parts = parts[(shapely.get_type_id(parts) == 1) & ~shapely.is_empty(parts)]
     allg = shapely.multilinestrings(np.concatenate([parts, [section.exterior]]))
     noded = shapely.node(allg)
     faces = shapely.get_parts(shapely.polygonize(shapely.get_parts(noded)))
-    shapely.prepare(section)
-    pts = shapely.get_coordinates(shapely.point_on_surface(faces))
-    inside = shapely.contains_xy(section, pts[:, 0], pts[:, 1])
-    return faces[inside]
+    # faces of the section lie within it (up to round-off); those in the margin do not
+    tight = shapely.buffer(section, GEOMETRY_RTOL * extent, join_style="mitre")
+    shapely.prepare(tight)
+    inside = shapely.contains(tight, faces)
+    # near-coincident lines (a joint within round-off of the outline or of
+    # another joint) leave faces of no area: drop them
+    solid = shapely.area(faces) > 1e-12 * extent**2
+    if (inside & ~solid).any():
+        log.info("dropped %d faces of no area", int((inside & ~solid).sum()))
+    return faces[inside & solid]
 
 
 def _merge_ground(faces: np.ndarray, in_ground: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -54,8 +54,10 @@ class Profile:
             raise InputError("profile", "needs at least 2 (x, y) points", "give a polyline")
         if not np.isfinite(xy).all():
             raise InputError("profile", "has a coordinate that is not finite", "fix the point")
-        step = np.hypot(*np.diff(xy, axis=0).T)
         span = float(np.hypot(*(xy.max(axis=0) - xy.min(axis=0)))) or 1.0
+        # coordinates near underflow (1e-308) break GEOS's robust predicates: snap them to 0
+        xy[np.abs(xy) < 1e-100 * span] = 0.0
+        step = np.hypot(*np.diff(xy, axis=0).T)
         keep = np.concatenate([[True], step > 1e-12 * span])
         xy = xy[keep]
         if len(xy) < 2:
