@@ -273,6 +273,7 @@ def test_every_key_is_in_the_format_document():
             assert f"`{key}`" in doc, key
 
 
+@pytest.mark.filterwarnings("ignore:positional argument `normalized`:DeprecationWarning")
 def test_the_format_documents_complete_example_is_valid(tmp_path):
     """The first ```yaml block of docs/file-format.md is a complete, valid model."""
     doc = (ROOT / "docs" / "file-format.md").read_text()

@@ -144,18 +144,10 @@ _AS_INTEGER = BeforeValidator(_integer)
 # constraints go before the validators, so that the JSON Schema shows them
 Number = Annotated[float, Field(allow_inf_nan=False), _AS_NUMBER]
 Integer = Annotated[int, _AS_INTEGER]
-Point = Annotated[
-    tuple[Number, Number],
-    Field(description="A point `[x, y]` (x to the right, y up)."),
-]
-Polygon = Annotated[
-    list[Point],
-    Field(
-        min_length=3,
-        description="Polygon vertices `[[x, y], ...]` in order around it (either sense, "
-        "not closed).",
-    ),
-]
+#: A point ``[x, y]`` (x to the right, y up).
+Point = tuple[Number, Number]
+#: Polygon vertices ``[[x, y], ...]`` in order around it (either sense, not closed).
+Polygon = Annotated[list[Point], Field(min_length=3)]
 Angle = Annotated[float, Field(ge=0.0, lt=90.0, allow_inf_nan=False), _AS_NUMBER]
 Positive = Annotated[float, Field(gt=0.0, allow_inf_nan=False), _AS_NUMBER]
 NonNegative = Annotated[float, Field(ge=0.0, allow_inf_nan=False), _AS_NUMBER]
