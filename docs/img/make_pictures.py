@@ -75,7 +75,11 @@ def main() -> None:
     plots.plot_failure(fos).figure.savefig(HERE / "failure-at-fos.png", dpi=dpi)
     plots.plot_deformed(fos.stable_analysis).figure.savefig(HERE / "deformed.png", dpi=dpi)
     plots.plot_deformed(fos, use="mechanism").figure.savefig(HERE / "mechanism.png", dpi=dpi)
-    plots.plot_joint_stress(a, "bedding").savefig(HERE / "stress-bedding.png", dpi=dpi)
+    bed = model.joint_index("bedding")
+    traces = [k for k, j in enumerate(model.line_joint) if j == bed]
+    longest = max(traces, key=lambda k: len(plots.select_interfaces(a, k)))
+    stress = plots.plot_joint_stress(fos.stable_analysis, longest)
+    stress.savefig(HERE / "stress-bedding.png", dpi=dpi)
     plots.plot_joint_stress(fos.failed_analysis).savefig(HERE / "stress-slip-surface.png", dpi=dpi)
     plots.plot_fos(fos).figure.savefig(HERE / "fos-search.png", dpi=dpi)
     plots.plot_progressive(fos).savefig(HERE / "progressive.png", dpi=90)

@@ -143,7 +143,12 @@ def _failed_table(a: Analysis, stress_unit: str, limit: int) -> str:
         "slip surface",
     ]
     more = f'<p class="note">... and {idx.size - limit} more.</p>' if idx.size > limit else ""
-    return _table(header, rows, left=2, cls="failed-joints") + more
+    table = _table(header, rows, left=2, cls="failed-joints") + more
+    if idx.size <= 15:
+        return table
+    return (
+        f"<details><summary>{idx.size} failed interfaces (click to show)</summary>{table}</details>"
+    )
 
 
 def _unstable_table(a: Analysis, limit: int) -> str:
