@@ -316,3 +316,80 @@ def test_any_value_either_builds_or_gives_a_keyed_error(value, key):
     except ModelFileError as exc:
         assert str(exc).startswith("f.yaml:")
         assert f"joints.bedding.{key}" in str(exc) or "not valid YAML" in str(exc)
+
+
+# ------------------------------------------------------- generated slopes
+SLOPE = """
+units: kN, m, kPa
+materials: {rock: {unit_weight: 25}}
+joints:
+  bedding: {normal_stiffness: 1.0e+6, friction_angle: 35}
+  cross: {normal_stiffness: 1.0e+6, friction_angle: 35}
+  base: {normal_stiffness: 1.0e+6, friction_angle: 45}
+ground_joint: base
+slope:
+  profile: {height: 6, face_angle: 60}
+  depth: 3
+  joint_sets:
+    bedding: {dip: 0, spacing: 2, origin: [0, 1]}
+    cross: {dip: 90, spacing: 3, origin: [0.5, 0]}
+"""
+
+
+def _slope(text: str):
+    pytest.importorskip("rockdem.geometry")
+    return parse_model(text, source="slope.yaml")
+
+
+def test_slope_model_has_the_sets_and_the_ground_joint():
+    model, _ = _slope(SLOPE)
+    names = [j.name for j in model.joints]
+    assert names[:2] == ["bedding", "cross"] and "ground" in names
+    assert model.joints[model.ground].friction_angle == 45
+    free = ~model.blocks.fixed
+    assert free.sum() > 5 and model.blocks.fixed.sum() >= 1
+    assert np.allclose(model.blocks.unit_weight[free], 25)
+    system = rd.build_system(model)
+    kinds = {model.joints[j].name for j in system.interfaces.joint}
+    assert kinds == {"bedding", "cross", "ground"}
+
+
+def test_slope_removal_by_id_region_and_profile():
+    model, _ = _slope(SLOPE)
+    free_ids = model.blocks.ids[~model.blocks.fixed]
+    area = model.blocks.area[~model.blocks.fixed].sum()
+    text = SLOPE + f"remove:\n  blocks: [{int(free_ids[0])}]\n"
+    fewer, _ = _slope(text)
+    assert int(free_ids[0]) not in fewer.blocks.ids.tolist()
+    cut, _ = _slope(SLOPE + "remove:\n  profile: [[-20, 4], [20, 4]]\n")
+    assert cut.blocks.area[~cut.blocks.fixed].sum() < area
+    import shapely
+
+    free = shapely.union_all(cut.blocks.polygons()[~cut.blocks.fixed])
+    assert shapely.bounds(free)[3] <= 4 + 1e-9
+
+
+def test_slope_joint_set_may_name_its_joint():
+    text = SLOPE.replace("cross: {dip: 90", "vertical: {joint: cross, dip: 90")
+    model, _ = _slope(text)
+    assert "vertical" in [j.name for j in model.joints]
+
+
+def test_slope_explicit_profile_points():
+    text = SLOPE.replace("profile: {height: 6, face_angle: 60}",
+                         "profile: {points: [[-6, 6], [0, 6], [3, 0], [9, 0]]}")
+    model, _ = _slope(text)
+    assert (~model.blocks.fixed).sum() > 5
+
+
+def test_slope_geometry_error_is_keyed():
+    text = SLOPE.replace("origin: [0, 1]}", "origin: [0, 1], gap: 1, trace_length: 3}")
+    with pytest.raises(ModelFileError) as info:
+        _slope(text)
+    assert str(info.value).startswith("slope.yaml:") and "slope" in str(info.value)
+    assert "bridge" in str(info.value)
+
+
+def test_remove_profile_is_for_slopes_only():
+    with pytest.raises(ModelFileError, match=r"remove\.profile: is for generated slopes"):
+        parse_model(BOX + "remove: {profile: [[0, 0], [1, 0]]}\n")

@@ -352,6 +352,9 @@ class RemoveSpec(_Section):
     regions: list[Polygon] = []
     """Polygons to excavate.  Generated slopes are cut along the polygon; with
     explicit blocks, every block whose centroid lies inside is removed."""
+    profile: list[Point] | None = Field(default=None, min_length=2)
+    """Generated slopes only: cut the slope down to this new ground profile
+    `[[x, y], ...]` (left to right; everything above it is excavated)."""
 
 
 class PointLoadSpec(_Section):
@@ -904,6 +907,9 @@ def _check_references(cfg: ModelFile, source: str, nodes: Any) -> None:
             ids.add(bid)
         if all(b.fixed for b in cfg.blocks):
             fail(("blocks",), "every block is fixed", "set `fixed: false` on the blocks that move")
+        if cfg.remove.profile is not None:
+            fail(("remove", "profile"), "is for generated slopes",
+                 "use `remove.regions` or `remove.blocks` with explicit blocks")
         for k, bid in enumerate(cfg.remove.blocks):
             if bid not in ids:
                 fail(("remove", "blocks", k), f"no block has id {bid}", "use an id of `blocks`")
@@ -1175,6 +1181,8 @@ def _slope_model(cfg: ModelFile, joints, loads, settings, name: str):
         geom = geometry.remove_blocks(geom, list(cfg.remove.blocks))
     for region in cfg.remove.regions:
         geom = geometry.excavate(geom, [tuple(p) for p in region])
+    if cfg.remove.profile is not None:
+        geom = geometry.cut_to_profile(geom, [tuple(p) for p in cfg.remove.profile])
     return geom.model(loads=loads, settings=settings, name=name)
 
 
