@@ -104,11 +104,8 @@ def excavate(geom: SlopeGeometry, region, *, where: str = "excavation region") -
         raise InputError(where, f"would leave a hole in block {int(blocks.ids[k])}",
                          "extend the region to a free surface, or remove the block")
     parts, owner = shapely.get_parts(rest, return_index=True)
-    parts = parts[shapely.get_type_id(parts) == 3] if parts.size else parts
-    if len(parts):
-        parts, owner = shapely.get_parts(rest, return_index=True)
-        poly_mask = shapely.get_type_id(parts) == 3
-        parts, owner = parts[poly_mask], owner[poly_mask]
+    is_piece = (shapely.get_type_id(parts) == 3) & ~shapely.is_empty(parts)
+    parts, owner = parts[is_piece], owner[is_piece]
     area = shapely.area(parts)
     small = geom.min_block_fraction * geom.typical_area if math.isfinite(
         geom.typical_area) else 0.0
