@@ -350,3 +350,21 @@ def test_generated_slope_runs_in_the_engine():
     assert a.stable
     f = rd.factor_of_safety(m)
     assert f.value is not None and f.value > 1
+
+
+def test_excavation_removes_whole_blocks_and_small_pieces():
+    g = generate_slope(box(10, 10), [JointSet("v", 90, 1.0, J, origin=(0.5, 0))], depth=10,
+                       boundary=("base", "back"), min_block_fraction=0.1)
+    # cuts 0.05 off ... leaves a 0.05 x 10 strip of the column [7.5, 8.5]: removed, reported
+    h = excavate(g, shapely.box(7.55, -1, 20, 20))
+    assert free_area(h) == pytest.approx(7.5 * 10, rel=1e-12)
+    removed = [s for s in h.slivers if s.action == "removed"]
+    assert len(removed) == 1
+    assert removed[0].area == pytest.approx(0.05 * 10, rel=1e-9)
+    assert h.blocks.n_blocks == g.blocks.n_blocks - 3  # columns [7.5, 8.5], [8.5, 9.5], [9.5, 10]
+    # a partly cut block keeps its id
+    k = excavate(g, shapely.box(8.2, -1, 20, 20))
+    j = g.blocks.index_of([int(g.blocks.ids[np.argmax(g.blocks.centroid[:, 0] == 8.0)])])[0]
+    assert g.blocks.centroid[j, 0] == pytest.approx(8.0)  # the column [7.5, 8.5]
+    i = k.blocks.index_of([g.blocks.ids[j]])[0]
+    assert k.blocks.area[i] == pytest.approx(0.7 * 10, rel=1e-12)

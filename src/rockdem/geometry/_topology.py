@@ -112,7 +112,11 @@ def merge_groups(polys: np.ndarray, labels: np.ndarray) -> tuple[np.ndarray, np.
 
 
 def merge_slivers(
-    polys: np.ndarray, small_area: float, movable: np.ndarray | None = None, rounds: int = 8
+    polys: np.ndarray,
+    small_area: float,
+    movable: np.ndarray | None = None,
+    rounds: int = 8,
+    thin: float = 0.0,
 ) -> tuple[np.ndarray, np.ndarray, list[tuple[int, float, tuple[float, float], bool]]]:
     """Merge every polygon smaller than ``small_area`` into its neighbour
     sharing the longest edge, repeating while merged groups stay small.
@@ -124,6 +128,8 @@ def merge_slivers(
     small_area : float
     movable : ndarray of bool, optional
         Which polygons may be merged at all (default all).
+    thin : float
+        Polygons thinner than this (area <= thin x perimeter) are slivers too.
 
     Returns
     -------
@@ -138,13 +144,17 @@ def merge_slivers(
     n0 = len(polys)
     origin = np.arange(n0)
     movable = np.ones(n0, dtype=bool) if movable is None else np.asarray(movable, bool).copy()
+    def is_small(p):
+        a = shapely.area(p)
+        return (a < small_area) | (a <= thin * shapely.length(p))
+
     area0 = shapely.area(polys)
-    sliver0 = (area0 < small_area) & movable
+    sliver0 = is_small(polys) & movable
     cent0 = shapely.get_coordinates(shapely.centroid(polys[sliver0]))
     stuck = np.zeros(len(polys), dtype=bool)
     for _ in range(rounds):
         n = len(polys)
-        small = (shapely.area(polys) < small_area) & movable & ~stuck
+        small = is_small(polys) & movable & ~stuck
         if not small.any():
             break
         fa, fb, length, _ = adjacency(polys)

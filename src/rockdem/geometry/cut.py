@@ -225,6 +225,15 @@ def generate_slope(
     free_area = shapely.area(faces[~in_ground])
     typical = float(np.median(free_area)) if free_area.size else float("nan")
     report: list = []
+    # faces thinner than the engine's tolerance are always merged (they cannot be analysed)
+    thin = 2 * tol
+    if len(faces) > 1:
+        fa = shapely.area(faces)
+        if (fa <= thin * shapely.length(faces)).any():
+            faces, origin, _ = topo.merge_slivers(faces, 0.0, movable=~in_ground, thin=thin)
+            gnew = np.zeros(len(faces), dtype=bool)
+            gnew[origin[in_ground]] = True
+            in_ground = gnew
     if frac > 0 and free_area.size > 1:
         small = frac * typical
         if slivers == "merge":

@@ -142,6 +142,8 @@ class JointSet:
                 raise InputError(f"{where} {key}", "is negative", "give a value >= 0")
         object.__setattr__(self, "dip", dip)
         object.__setattr__(self, "spacing", spacing)
+        # coordinates near underflow break GEOS's robust predicates: snap them to 0
+        ox, oy = (0.0 if abs(v) < 1e-100 else v for v in (ox, oy))
         object.__setattr__(self, "origin", (ox, oy))
         object.__setattr__(self, "gap", gap)
         object.__setattr__(self, "trace_length", trace)
