@@ -29,7 +29,7 @@ MAX_CASCADE = 100
 MECHANISM_SHARE = 0.01
 
 
-def _settle(system, state, q0, load_factor, factor, stage):
+def _settle(system, state, q0, load_factor, factor, stage, base_factor=None):
     """Solve at one load level, re-solving while committed failures shed strength.
 
     Returns ``(solve, state)``; the state is committed only if the solve converged.
@@ -38,7 +38,8 @@ def _settle(system, state, q0, load_factor, factor, stage):
     scale = system.assembly.dof_scale
     f_norm = np.linalg.norm(load_factor * system.f_ext * scale)
     sol = solve_equilibrium(
-        system, state, load_factor=load_factor, strength_factor=factor, q0=q0
+        system, state, load_factor=load_factor, strength_factor=factor, q0=q0,
+        base_factor=base_factor,
     )
     iterations, history = sol.iterations, list(sol.residuals)
     for _ in range(MAX_CASCADE):
@@ -52,7 +53,8 @@ def _settle(system, state, q0, load_factor, factor, stage):
             sol = Solve(True, sol.q, resp, iterations, history, "converged", sol.direction)
             break
         sol = solve_equilibrium(
-            system, state, load_factor=load_factor, strength_factor=factor, q0=sol.q
+            system, state, load_factor=load_factor, strength_factor=factor, q0=sol.q,
+            base_factor=factor,
         )
         iterations += sol.iterations
         history += sol.residuals
@@ -285,7 +287,7 @@ def _continue(system: System, base: Analysis, factor: float, stage: int) -> Anal
     q0 = np.zeros(asm.n_dof)
     q0[asm.dof[free].ravel()] = base.displacement[free].ravel()
     lam = base.load_factor
-    sol, state = _settle(system, base.state, q0, lam, factor, stage)
+    sol, state = _settle(system, base.state, q0, lam, factor, stage, base.strength_factor)
     ev = Evidence(sol.reason, sol.iterations, tuple(sol.residuals))
     n_failed = int((state.yielded | state.broken).sum())
     step = Step(stage, lam, factor, sol.converged, ev, n_failed)

@@ -111,7 +111,7 @@ class Settings:
     points_per_interface: int = 3
     load_steps: int = 5
     tolerance: float = 1e-8
-    max_iterations: int = 60
+    max_iterations: int = 100
     reduce_tensile: bool = True
 
     def __post_init__(self) -> None:

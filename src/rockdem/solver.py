@@ -37,12 +37,13 @@ from .springs import Springs, place_springs
 
 log = logging.getLogger(__name__)
 
-BETA_START = 1e-8
+BETA_START = 1e-6
 BETA_MAX = 0.1
+LINE_SEARCH_HALVINGS = 8
 #: displacements beyond this multiple of the elastic response are a mechanism
 BLOWUP = 1e6
-#: the strength homotopy starts with the strengths multiplied by 1 / this
-HOMOTOPY_START = 0.05
+#: fresh starts of the strength homotopy: halve the factor up to this many times
+HOMOTOPY_TRIES = 5
 #: smallest relative step of the homotopy before equilibrium is declared lost
 HOMOTOPY_MIN_STEP = 1e-4
 
@@ -113,12 +114,12 @@ class Solve:
     direction: np.ndarray  # last Newton direction (the mechanism if it failed)
 
 
-def residual(system: System, q, state, load_factor, factor, capacity=None):
+def residual(system: System, q, state, load_factor, factor):
     """Response and out-of-balance force at displacements q."""
     asm = system.assembly
     dn, ds = asm.relative_displacement(q)
     resp = evaluate(
-        system.springs, state, dn, ds, factor, system.model.settings.reduce_tensile, capacity
+        system.springs, state, dn, ds, factor, system.model.settings.reduce_tensile
     )
     r = load_factor * system.f_ext - asm.internal_force(resp.force)
     return resp, r
@@ -133,7 +134,14 @@ def _lu(J):
 
 def _newton(system, state, load_factor, factor, q, max_it):
     """Semismooth Newton with an adaptive Levenberg-Marquardt shift and a
-    backtracking line search on the scaled residual."""
+    backtracking line search on the scaled out-of-balance force.
+
+    The step solves ``(J + beta K0) dq = r`` with ``J`` the consistent tangent.
+    Where sliding and open springs leave a block nearly free ``J`` is nearly
+    singular; the shift ``beta K0`` (``K0`` the elastic stiffness) bounds the
+    step.  ``beta`` rises x10 when the line search fails and falls /10 after
+    a full step; the solve gives up when ``beta`` exceeds ``BETA_MAX``.
+    """
     asm = system.assembly
     scale = asm.dof_scale
     tol = system.model.settings.tolerance
@@ -156,7 +164,7 @@ def _newton(system, state, load_factor, factor, q, max_it):
         step = lu.solve(r)
         direction = step
         alpha, accepted = 1.0, False
-        for _ in range(8):
+        for _ in range(LINE_SEARCH_HALVINGS):
             q_try = q + alpha * step
             resp_try, r_try = residual(system, q_try, state, load_factor, factor)
             merit_try = np.linalg.norm(r_try * scale) / f_norm
@@ -187,18 +195,19 @@ def solve_equilibrium(
     load_factor: float = 1.0,
     strength_factor: float = 1.0,
     q0: np.ndarray | None = None,
+    base_factor: float | None = None,
     max_iterations: int | None = None,
-    homotopy_start: float | None = None,
 ) -> Solve:
     """Displacements in equilibrium with the loads, from the committed state.
 
-    First a direct semismooth Newton solve from ``q0``.  If that fails, a
-    homotopy in the strength: solve the same problem with the strengths
-    multiplied by 1 / ``homotopy_start`` (strong joints: few springs slide,
-    Newton converges), then weaken them step by step to the requested factor,
-    each solve starting from the previous one (step x1.5 after a success,
-    halved after a failure).  Equilibrium is declared lost only when a step
-    of relative size ``HOMOTOPY_MIN_STEP`` fails.
+    First a direct Newton solve from ``q0``.  If that fails, a homotopy in
+    the strength factor: from ``q0`` if it is in equilibrium at
+    ``base_factor``, otherwise from a fresh solve at a smaller factor
+    (stronger joints: fewer springs slide, Newton converges), the strength
+    is reduced step by step to the requested factor, each solve starting from
+    the previous one (the step grows x1.5 after a success and is halved after
+    a failure).  No state is committed on the way.  Equilibrium is declared
+    lost only when a step smaller than ``HOMOTOPY_MIN_STEP`` (relative) fails.
     """
     asm = system.assembly
     max_it = max_iterations or system.model.settings.max_iterations
@@ -210,31 +219,40 @@ def solve_equilibrium(
     sol = _newton(system, state, load_factor, strength_factor, q, max_it)
     if sol.converged:
         return sol
-    # homotopy in the strength factor (no state is committed on the way)
-    F_target = strength_factor
-    F_ok = (homotopy_start or HOMOTOPY_START) * F_target
-    total = sol.iterations
-    history = list(sol.residuals)
-    start = _newton(system, state, load_factor, F_ok, np.zeros(asm.n_dof), max_it)
-    total += start.iterations
-    if not start.converged:
-        return Solve(False, sol.q, sol.response, total, history, "no start", sol.direction)
-    q_ok = start.q
-    growth = 1.5
+    total, history = sol.iterations, list(sol.residuals)
+    target = strength_factor
+    if base_factor is not None and q0 is not None:
+        F_ok, q_ok = base_factor, q0
+    else:
+        F_ok, q_ok = target, None
+        for _ in range(HOMOTOPY_TRIES):
+            F_ok *= 0.5
+            start = _newton(system, state, load_factor, F_ok, np.zeros(asm.n_dof), max_it)
+            total += start.iterations
+            if start.converged:
+                q_ok = start.q
+                break
+        if q_ok is None:
+            return Solve(False, sol.q, sol.response, total, history, "no start", sol.direction)
+    step = target - F_ok
+    last = sol
     while True:
-        F_try = min(F_ok * growth, F_target)
+        F_try = F_ok + step
         trial = _newton(system, state, load_factor, F_try, q_ok, max_it)
         total += trial.iterations
         history += trial.residuals
         if trial.converged:
-            if F_try >= F_target:
+            if F_try == target:
                 return Solve(True, trial.q, trial.response, total, history, "converged",
                              trial.direction)
             F_ok, q_ok = F_try, trial.q
-            growth = min(growth * 1.5, 1.5)
+            step = 1.5 * step
+            if (target - F_ok) * (target - F_ok - step) <= 0:  # do not overshoot
+                step = target - F_ok
         else:
-            growth = 1.0 + 0.5 * (growth - 1.0)
-            if growth - 1.0 < HOMOTOPY_MIN_STEP:
-                reason = f"no equilibrium beyond strength factor {F_ok:.6g} ({trial.reason})"
-                return Solve(False, trial.q, trial.response, total, history, reason,
-                             trial.direction)
+            last = trial
+            step = 0.5 * step
+            if abs(step) < HOMOTOPY_MIN_STEP * abs(target):
+                reason = f"no equilibrium beyond strength factor {F_ok:.6g} ({last.reason})"
+                return Solve(False, last.q, last.response, total, history, reason,
+                             last.direction)

@@ -62,7 +62,7 @@ class Response:
     sigma: np.ndarray  # normal stress, compression positive
     tau: np.ndarray  # shear stress
     capacity: np.ndarray  # current shear strength (reduced by the factor)
-    open: np.ndarray  # bool: beyond the tension cut-off
+    open: np.ndarray  # bool: at or beyond the tensile strength
     sliding: np.ndarray  # bool: at the shear strength
     d_sn: np.ndarray  # d tau / d dn (non-symmetric friction coupling)
     d_ss: np.ndarray  # d tau / d ds
@@ -90,16 +90,13 @@ def evaluate(
     ds: np.ndarray,
     factor: float = 1.0,
     reduce_tensile: bool = True,
-    capacity: np.ndarray | None = None,
 ) -> Response:
     """Stresses and consistent tangent at relative displacements ``(dn, ds)``.
 
     Within one solve the normal spring is perfectly plastic at the tensile
-    strength; the brittle drop to zero happens when the state is committed
-    (:func:`commit` marks the point broken and the load is solved again).
-    With ``capacity`` given the shear strength is frozen at those values
-    (the convex sub-problem of :func:`energy`); otherwise it follows the
-    normal stress (Mohr-Coulomb).
+    strength, so the residual stays continuous; the brittle drop to zero
+    happens when the state is committed (:func:`commit` marks the point
+    broken and the load is solved again: the redistribution of the excess).
     """
     c, tan_phi, tensile = strength(springs, state, factor, reduce_tensile)
     kn, ks = springs.kn, springs.ks
@@ -107,39 +104,22 @@ def evaluate(
     is_open = pull > tensile
     sigma = -np.minimum(pull, tensile)
     raw_cap = c + sigma * tan_phi
-    cap = np.maximum(raw_cap, 0.0) if capacity is None else capacity
+    cap = np.maximum(raw_cap, 0.0)
     tau_trial = ks * (ds - state.slip)
     sliding = np.abs(tau_trial) > cap
     sign = np.sign(tau_trial)
     tau = np.where(sliding, sign * cap, tau_trial)
     d_nn = np.where(is_open, 0.0, kn)
     d_ss = np.where(sliding, 0.0, ks)
-    if capacity is None:
-        d_sn = np.where(sliding & ~is_open & (raw_cap > 0), -sign * kn * tan_phi, 0.0)
-    else:
-        d_sn = np.zeros_like(dn)
+    d_sn = np.where(sliding & ~is_open & (raw_cap > 0), -sign * kn * tan_phi, 0.0)
     return Response(sigma, tau, cap, is_open, sliding, d_sn, d_ss, d_nn)
-
-
-def energy(springs: Springs, state: SpringState, dn, ds, tensile, capacity) -> np.ndarray:
-    """Stored + dissipated energy per unit length with frozen strengths (convex).
-
-    Its gradient is the generalised force of :func:`evaluate` called with the
-    same ``capacity``: the merit function of the frozen-strength sub-problem.
-    """
-    kn, ks = springs.kn, springs.ks
-    pull = kn * dn
-    e_n = np.where(pull <= tensile, 0.5 * kn * dn**2, tensile * dn - 0.5 * tensile**2 / kn)
-    x = np.abs(ds - state.slip)
-    e_s = np.where(ks * x <= capacity, 0.5 * ks * x**2, capacity * x - 0.5 * capacity**2 / ks)
-    return e_n + e_s
 
 
 def commit(
     springs: Springs, state: SpringState, response: Response, ds: np.ndarray, stage: int
 ) -> SpringState:
     """The state after a converged step: plastic slip, failure flags, first failure."""
-    new_slip = np.where(response.sliding | response.open, ds - response.tau / springs.ks, state.slip)
+    new_slip = np.where(response.sliding, ds - response.tau / springs.ks, state.slip)
     yielded = state.yielded | response.sliding
     broken = state.broken | response.open
     newly = (yielded | broken) & (state.first_failure < 0)
