@@ -443,7 +443,7 @@ class AnalysisSpec(_Section):
     """Increments in which the loads are applied (staged gravity)."""
     tolerance: Annotated[float, Field(gt=0.0, lt=1e-2, allow_inf_nan=False), _AS_NUMBER] = 1e-8
     """Equilibrium when the out-of-balance force is below tolerance x the external force."""
-    max_iterations: Annotated[int, Field(ge=1), _AS_INTEGER] = 60
+    max_iterations: Annotated[int, Field(ge=1), _AS_INTEGER] = 100
     """Newton iterations per solve before a step is declared failed."""
     reduce_tensile: bool = True
     """Divide the tensile strength by the trial factor in strength reduction too."""
