@@ -232,8 +232,21 @@ def test_fos_plot(fos):
 
 
 def test_fos_plot_without_displacements(fos):
-    ax = plots.plot_fos(fos, recompute=False)
+    """Trials with no recorded displacement fall back to a verdict-only plot."""
+    import dataclasses
+
+    bare = dataclasses.replace(
+        fos, trials=tuple(dataclasses.replace(t, max_displacement=None) for t in fos.trials)
+    )
+    ax = plots.plot_fos(bare, recompute=False)
     assert ax.get_ylabel() == "verdict"
+
+
+def test_fos_plot_uses_recorded_displacements(fos):
+    values, source = plots.trial_displacements(fos, recompute=False)
+    assert source == "search"
+    stable = np.array([t.stable for t in fos.trials])
+    assert np.all(np.isfinite(values[stable])) and np.all(np.isnan(values[~stable]))
 
 
 @pytest.mark.parametrize("what", sorted(plots.WHAT))

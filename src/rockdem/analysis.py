@@ -78,6 +78,8 @@ def _mechanism(system: System, sol: Solve, state, load_factor, factor):
         d = spla.splu(J).solve(r)
     except RuntimeError:
         d = sol.direction
+    if np.dot(d, system.f_ext) < 0:  # the loads do positive work on the mechanism
+        d = -d
     free = ~system.blocks.fixed
     out[free] = d[asm.dof[free]]
     size = np.sqrt(np.abs(system.blocks.area))
@@ -100,7 +102,12 @@ def _package(system, sol, state, load_factor, factor, stable, steps, q_ok):
         unstable = np.zeros(system.blocks.n_blocks, dtype=bool)
     else:
         resp = sol.response
-        mech, unstable = _mechanism(system, sol, state, load_factor, factor)
+        lam_fail = steps[-1].load_factor if steps else load_factor
+        mech, unstable = _mechanism(system, sol, state, lam_fail, factor)
+        # show the springs failing in the mechanism (not committed: no equilibrium)
+        _, ds = system.assembly.relative_displacement(sol.q)
+        stage = steps[-1].stage if steps else 0
+        state = commit(system.springs, state, resp, ds, stage)
     sp_res, if_res = tabulate(system, state, resp, factor, system.model.settings.reduce_tensile)
     if stable:
         slip = np.zeros(0, dtype=np.int64)
@@ -224,7 +231,8 @@ def factor_of_safety(
     trials: list[Trial] = []
 
     def record(F, a: Analysis):
-        t = Trial(F, a.stable, a.evidence)
+        size = float(np.abs(a.displacement[:, :2]).max()) if a.stable else float("nan")
+        t = Trial(F, a.stable, a.evidence, size)
         trials.append(t)
         if progress is not None:
             progress(t)
@@ -250,7 +258,7 @@ def factor_of_safety(
         else:
             hi_an = a
     # 2. continuation: grow until failure, then bisect
-    stage = len(trials)
+    stage = max(step.stage for step in lo_an.steps)  # trials follow the load steps
     while hi_an is None or hi_an.strength_factor - lo_an.strength_factor > width:
         if hi_an is None:
             F = lo_an.strength_factor * grow

@@ -155,11 +155,16 @@ class Analysis:
 
 @dataclass(frozen=True, eq=False, repr=False)
 class Trial:
-    """One strength-reduction trial."""
+    """One strength-reduction trial.
+
+    ``max_displacement`` is the largest block translation of the converged
+    state (NaN when the trial found no equilibrium).
+    """
 
     factor: float
     stable: bool
     evidence: Evidence
+    max_displacement: float = float("nan")
 
 
 @dataclass(frozen=True, eq=False, repr=False)
