@@ -29,10 +29,13 @@ MAX_CASCADE = 100
 MECHANISM_SHARE = 0.01
 
 
-def _settle(system, state, q0, load_factor, factor, stage, base_factor=None):
+def _settle(system, state, q0, load_factor, factor, stage, base_factor=None, total=False):
     """Solve at one load level, re-solving while committed failures shed strength.
 
-    Returns ``(solve, state)``; the state is committed only if the solve converged.
+    Returns ``(solve, state)``; the state is committed only if the solve
+    converged.  ``total=True`` keeps the plastic slip at zero (the shear
+    spring follows the total relative displacement): used by the strength
+    trials, see :func:`factor_of_safety`.
     """
     tol = system.model.settings.tolerance
     scale = system.assembly.dof_scale
@@ -47,6 +50,8 @@ def _settle(system, state, q0, load_factor, factor, stage, base_factor=None):
             break
         dn, ds = system.assembly.relative_displacement(sol.q)
         new_state = commit(system.springs, state, sol.response, ds, stage)
+        if total:
+            new_state = new_state.without_slip()
         resp, r = residual(system, sol.q, new_state, load_factor, factor)
         state = new_state
         if f_norm == 0 or np.linalg.norm(r * scale) <= tol * f_norm:
@@ -58,7 +63,15 @@ def _settle(system, state, q0, load_factor, factor, stage, base_factor=None):
         )
         iterations += sol.iterations
         history += sol.residuals
-    return Solve(sol.converged, sol.q, sol.response, iterations, history, sol.reason, sol.direction), state
+    out = Solve(sol.converged, sol.q, sol.response, iterations, history, sol.reason,
+                sol.direction, sol.reached, sol.reached_q, sol.failed_at)
+    return out, state
+
+
+def _evidence(sol: Solve) -> Evidence:
+    return Evidence(
+        sol.reason, sol.iterations, tuple(sol.residuals), None, sol.reached, sol.failed_at
+    )
 
 
 def _mechanism(system: System, sol: Solve, state, load_factor, factor):
@@ -178,7 +191,7 @@ def analyse(
         lam = k / n_steps
         q0 = q * (lam / lam_prev) if lam_prev > 0 else q
         sol, new_state = _settle(system, state, q0, lam, strength_factor, k)
-        ev = Evidence(sol.reason, sol.iterations, tuple(sol.residuals))
+        ev = _evidence(sol)
         n_failed = int((new_state.yielded | new_state.broken).sum())
         steps.append(Step(k, lam, strength_factor, sol.converged, ev, n_failed))
         if progress is not None:
@@ -245,7 +258,8 @@ def factor_of_safety(
     hi_an: Analysis | None = None if first.stable else first
     while lo_an is None:  # unstable at the start: reduce from scratch
         hi_an = hi_an if hi_an is not None else first
-        F = F / grow
+        reached = hi_an.evidence.reached
+        F = reached if reached is not None and reached < F else F / grow
         if F < smallest:
             return FactorOfSafety(
                 None, (0.0, hi_an.strength_factor), "strength-independent", tuple(trials),
@@ -257,9 +271,12 @@ def factor_of_safety(
             lo_an = a
         else:
             hi_an = a
-    # 2. continuation: grow until failure, then bisect
+    # 2. continuation: grow until failure, then bisect.  A failed trial's
+    #    homotopy reports the largest factor it reached in equilibrium and the
+    #    factor just beyond that failed: both narrow the bracket at once.
     stage = max(step.stage for step in lo_an.steps)  # trials follow the load steps
-    while hi_an is None or hi_an.strength_factor - lo_an.strength_factor > width:
+    hi_F = hi_an.strength_factor if hi_an is not None else np.inf
+    while hi_F - lo_an.strength_factor > width:
         if hi_an is None:
             F = lo_an.strength_factor * grow
             if F > largest:
@@ -268,38 +285,48 @@ def factor_of_safety(
                     lo_an, None, _DEFINITION,
                 )
         else:
-            F = 0.5 * (lo_an.strength_factor + hi_an.strength_factor)
+            F = 0.5 * (lo_an.strength_factor + hi_F)
         stage += 1
-        a = _continue(system, lo_an, F, stage)
+        a, sol = _continue(system, lo_an, F, stage)
         record(F, a)
         if a.stable:
             lo_an = a
-        else:
-            hi_an = a
-    lo, hi = lo_an.strength_factor, hi_an.strength_factor
+            continue
+        hi_an, hi_F = a, min(F, sol.failed_at or F)
+        if sol.reached is not None and sol.reached > lo_an.strength_factor:
+            stage += 1
+            b, _ = _continue(system, lo_an, sol.reached, stage, q0=sol.reached_q)
+            record(sol.reached, b)
+            if b.stable:
+                lo_an = b
+    lo, hi = lo_an.strength_factor, hi_F
     return FactorOfSafety(
         0.5 * (lo + hi), (lo, hi), "strength", tuple(trials), lo_an, hi_an, _DEFINITION
     )
 
 
 _DEFINITION = (
-    "shear strength reduction: c, tan(phi) and the tensile strength divided by F at full "
-    "load; each trial continues from the converged state of the largest stable F"
+    "shear strength reduction: c, tan(phi) and the tensile strength divided by F at the full "
+    "load; each trial starts from the displacements and the failure flags (yielded, broken) "
+    "of the largest stable F, with the shear springs following the total relative displacement "
+    "(monotonic strength reduction, no slip history)"
 )
 
 
-def _continue(system: System, base: Analysis, factor: float, stage: int) -> Analysis:
-    """One strength trial from the converged state of ``base``."""
+def _continue(system: System, base: Analysis, factor: float, stage: int, q0=None):
+    """One strength trial from the converged state of ``base``: (Analysis, Solve)."""
     asm = system.assembly
     free = ~system.blocks.fixed
-    q0 = np.zeros(asm.n_dof)
-    q0[asm.dof[free].ravel()] = base.displacement[free].ravel()
+    q_base = np.zeros(asm.n_dof)
+    q_base[asm.dof[free].ravel()] = base.displacement[free].ravel()
+    q0 = q_base if q0 is None else q0
     lam = base.load_factor
-    sol, state = _settle(system, base.state, q0, lam, factor, stage, base.strength_factor)
-    ev = Evidence(sol.reason, sol.iterations, tuple(sol.residuals))
+    start = base.state.without_slip()
+    sol, state = _settle(system, start, q0, lam, factor, stage, base.strength_factor, total=True)
+    ev = _evidence(sol)
     n_failed = int((state.yielded | state.broken).sum())
     step = Step(stage, lam, factor, sol.converged, ev, n_failed)
     steps = (*base.steps, step)
     if sol.converged:
-        return _package(system, sol, state, lam, factor, True, steps, sol.q)
-    return _package(system, sol, base.state, lam, factor, False, steps, q0)
+        return _package(system, sol, state, lam, factor, True, steps, sol.q), sol
+    return _package(system, sol, start, lam, factor, False, steps, q_base), sol

@@ -18,6 +18,8 @@ class Evidence:
     iterations: int
     residuals: tuple[float, ...]
     certified: bool | None = None  # failure proven by the equilibrium LP (None: not checked)
+    reached: float | None = None  # strength homotopy: largest factor found in equilibrium
+    failed_at: float | None = None  # ... and the factor just beyond it that failed
 
     def __str__(self) -> str:
         last = self.residuals[-1] if self.residuals else float("nan")

@@ -112,6 +112,11 @@ class Solve:
     residuals: list[float]
     reason: str
     direction: np.ndarray  # last Newton direction (the mechanism if it failed)
+    #: strength homotopy: the largest factor reached in equilibrium, its
+    #: displacements, and the factor just beyond it that failed
+    reached: float | None = None
+    reached_q: np.ndarray | None = None
+    failed_at: float | None = None
 
 
 def residual(system: System, q, state, load_factor, factor):
@@ -255,4 +260,4 @@ def solve_equilibrium(
             if abs(step) < HOMOTOPY_MIN_STEP * abs(target):
                 reason = f"no equilibrium beyond strength factor {F_ok:.6g} ({last.reason})"
                 return Solve(False, last.q, last.response, total, history, reason,
-                             last.direction)
+                             last.direction, F_ok, q_ok, F_try)

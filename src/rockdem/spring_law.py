@@ -49,6 +49,10 @@ class SpringState:
             np.zeros(n), np.zeros(n, dtype=bool), np.zeros(n, dtype=bool), np.full(n, -1)
         )
 
+    def without_slip(self) -> SpringState:
+        """The same failure flags with the plastic slip set to zero."""
+        return SpringState(np.zeros_like(self.slip), self.yielded, self.broken, self.first_failure)
+
     @property
     def state(self) -> np.ndarray:
         """0 elastic, 1 shear-yielded, 2 tension-failed (tension wins)."""
