@@ -193,6 +193,9 @@ class JointSpec(_Section):
     cohesion (ductile)."""
     residual_friction_angle: Angle | None = None
     """Friction angle after yield; default (null) the peak friction angle."""
+    residual_tensile_strength: NonNegative | None = 0.0
+    """Tensile strength after a point has yielded in shear; default 0. null keeps
+    tensile_strength (ductile). A point broken in tension never carries tension again."""
     description: str = ""
     """Free text."""
 
@@ -968,6 +971,7 @@ def _joints(cfg: ModelFile) -> tuple:
             tensile_strength=j.tensile_strength,
             residual_cohesion=j.residual_cohesion,
             residual_friction_angle=j.residual_friction_angle,
+            residual_tensile_strength=j.residual_tensile_strength,
             stiffness_ratio=j.stiffness_ratio,
             name=name,
         )

@@ -33,6 +33,10 @@ class Joint:
         3DEC's Coulomb joint); set it equal to ``cohesion`` for a ductile joint.
     residual_friction_angle : float, optional
         Friction angle after yield, default ``friction_angle``.
+    residual_tensile_strength : float, optional
+        Tensile strength after the point has yielded in shear.  Default 0
+        (a sheared joint is open to tension); None keeps ``tensile_strength``.
+        A point that has failed in tension never carries tension again.
     stiffness_ratio : float
         ``kn / ks`` used when ``shear_stiffness`` is not given (2 to 3 for
         rock: ``2 (1 + nu)``).
@@ -52,6 +56,7 @@ class Joint:
     tensile_strength: float = 0.0
     residual_cohesion: float | None = 0.0
     residual_friction_angle: float | None = None
+    residual_tensile_strength: float | None = 0.0
     stiffness_ratio: float = 2.5
     name: str = "joint"
 
@@ -69,14 +74,20 @@ class Joint:
             object.__setattr__(self, "residual_cohesion", self.cohesion)
         if self.residual_friction_angle is None:
             object.__setattr__(self, "residual_friction_angle", self.friction_angle)
+        if self.residual_tensile_strength is None:
+            object.__setattr__(self, "residual_tensile_strength", self.tensile_strength)
         _check(where, "residual_cohesion", self.residual_cohesion, lo=0.0)
+        _check(where, "residual_tensile_strength", self.residual_tensile_strength, lo=0.0)
         _check(where, "residual_friction_angle", self.residual_friction_angle, lo=0.0, hi=90.0)
 
     @property
     def ductile(self) -> Joint:
-        """The same joint with its strength kept after yield (c_r = c, phi_r = phi)."""
+        """The same joint with its strength kept after shear yield."""
         return _replace(
-            self, residual_cohesion=self.cohesion, residual_friction_angle=self.friction_angle
+            self,
+            residual_cohesion=self.cohesion,
+            residual_friction_angle=self.friction_angle,
+            residual_tensile_strength=self.tensile_strength,
         )
 
 

@@ -29,6 +29,7 @@ import scipy.sparse.linalg as spla
 
 from .assembly import Assembly, build_assembly
 from .blocks import Blocks
+from .errors import InputError
 from .interfaces import Interfaces, assign_joints, find_interfaces
 from .loads import block_loads
 from .model import Model
@@ -95,7 +96,15 @@ def build_system(model: Model, f_block: np.ndarray | None = None) -> System:
     lu0 = None
     elastic = 1.0
     if asm.n_dof:
-        lu0 = spla.splu(K0, permc_spec="COLAMD")
+        try:
+            lu0 = spla.splu(K0, permc_spec="COLAMD")
+        except RuntimeError as exc:
+            raise InputError(
+                "model",
+                "the elastic stiffness is singular: some block is not held against "
+                f"rotation ({s.points_per_interface}-point {s.quadrature} rule)",
+                "use 2 or more spring points per interface",
+            ) from exc
         u = lu0.solve(f_ext)
         elastic = float(np.max(np.abs(u / asm.dof_scale))) or 1.0
     return System(model, blocks, faces, springs, asm, K0, f_block, f_ext, elastic, lu0)

@@ -83,7 +83,9 @@ def strength(springs: Springs, state: SpringState, factor: float = 1.0, reduce_t
     failed = state.yielded | state.broken
     c = np.where(state.broken, 0.0, np.where(failed, springs.cohesion_residual, springs.cohesion))
     tan_phi = np.where(failed, springs.tan_phi_residual, springs.tan_phi)
-    tensile = np.where(failed, 0.0, springs.tensile)
+    tensile = np.where(
+        state.broken, 0.0, np.where(state.yielded, springs.tensile_residual, springs.tensile)
+    )
     return c / factor, tan_phi / factor, tensile / factor if reduce_tensile else tensile
 
 

@@ -71,6 +71,7 @@ class Springs:
     tensile: np.ndarray
     cohesion_residual: np.ndarray
     tan_phi_residual: np.ndarray
+    tensile_residual: np.ndarray
     points_per_interface: int
 
     @property
@@ -104,6 +105,7 @@ def place_springs(
                 j.tensile_strength,
                 j.residual_cohesion,
                 np.tan(np.radians(j.residual_friction_angle)),
+                j.residual_tensile_strength,
             )
             for j in joints
         ],

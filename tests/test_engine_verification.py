@@ -1,0 +1,142 @@
+"""Verification against closed-form solutions (METHOD.md section 6).
+
+Each assert holds the closed form; tolerances are stated with their reason.
+The factor of safety is the midpoint of a bracket of width <= 0.005 by
+default, so it is within 0.25% of the limit by construction; the 0.5%
+tolerances below leave room for nothing else.
+"""
+
+import numpy as np
+import pytest
+
+import rockdem as rd
+from rockdem import verification as V
+
+TAN = lambda deg: np.tan(np.radians(deg))  # noqa: E731
+
+
+def joint(phi, c=0.0, **kw):
+    return rd.Joint(normal_stiffness=1e6, friction_angle=phi, cohesion=c, **kw)
+
+
+# ----------------------------------------------------------- single block
+@pytest.mark.parametrize(
+    "dip,phi", [(20, 30), (30, 35), (35, 35.4), (10, 40), (40, 45), (25, 24.6)]
+)
+def test_block_on_plane_factor_of_safety(dip, phi):
+    """FS = tan(phi) / tan(dip) within 0.5% (one pair within 0.5 degree of the limit)."""
+    fos = rd.factor_of_safety(V.block_on_plane(dip, joint(phi)))
+    assert fos.mode == "strength"
+    assert fos.value == pytest.approx(TAN(phi) / TAN(dip), rel=0.005)
+    lo, hi = fos.bracket
+    assert lo <= TAN(phi) / TAN(dip) <= hi + 1e-9
+    assert hi - lo <= 0.005
+
+
+@pytest.mark.parametrize("dip,phi", [(35, 35.4), (35.4, 35), (20, 30), (30, 20)])
+def test_block_on_plane_verdict(dip, phi):
+    """Stable iff tan(phi) > tan(dip), also 0.4 degree either side of the limit."""
+    a = rd.analyse(V.block_on_plane(dip, joint(phi)))
+    assert a.stable == (TAN(phi) > TAN(dip))
+    if not a.stable:
+        assert a.unstable_blocks.tolist() == [1]
+        # the mechanism slides down the dip (+x, -y), parallel to the plane
+        ux, uy, _ = a.mechanism[1]
+        assert ux > 0 and uy < 0
+        assert np.degrees(np.arctan2(-uy, ux)) == pytest.approx(dip, abs=0.5)
+
+
+@pytest.mark.parametrize("dip,phi,c", [(30, 20, 5.0), (40, 30, 10.0), (25, 15, 2.0)])
+def test_block_on_plane_with_cohesion(dip, phi, c):
+    """Ductile cohesion, no tension cut-off: FS = (c L + W cos d tan phi) / (W sin d)
+    within 0.5%.  (With a cut-off the uphill end of the base opens where the
+    weight acts outside the middle third, and loses its cohesion: a lower FS.)"""
+    width, height, gamma = 2.0, 1.0, 25.0
+    ductile = joint(phi, c, tensile_strength=1e4).ductile
+    model = V.block_on_plane(dip, ductile, width=width, height=height, unit_weight=gamma)
+    W = gamma * width * height
+    exact = (c * width + W * np.cos(np.radians(dip)) * TAN(phi)) / (W * np.sin(np.radians(dip)))
+    assert V.sliding_fos(dip, phi, cohesion=c, length=width, weight=W) == pytest.approx(exact)
+    assert rd.factor_of_safety(model).value == pytest.approx(exact, rel=0.005)
+
+
+@pytest.mark.parametrize("dip,phi,k", [(20, 35, 0.1), (25, 40, 0.15), (15, 30, 0.2)])
+def test_block_on_plane_pseudo_static(dip, phi, k):
+    """FS = tan(phi)(cos d - k sin d) / (sin d + k cos d) within 0.5% (kh toward +x)."""
+    d = np.radians(dip)
+    exact = TAN(phi) * (np.cos(d) - k * np.sin(d)) / (np.sin(d) + k * np.cos(d))
+    model = V.block_on_plane(dip, joint(phi), loads=rd.Loads(seismic_h=k))
+    assert rd.factor_of_safety(model).value == pytest.approx(exact, rel=0.005)
+
+
+# --------------------------------------------------------------- toppling
+@pytest.mark.parametrize("psi", [20.0, 30.0])
+def test_toppling_limit_is_tan_psi(psi):
+    """A b x h block on a base dipping psi topples iff b/h < tan(psi): checked 1% either side."""
+    h = 2.0
+    for ratio, stable in ((0.99, False), (1.01, True)):
+        b = ratio * TAN(psi) * h
+        a = rd.analyse(V.toppling_block(psi, b, h))
+        assert a.stable == stable, (psi, ratio)
+        if not stable:
+            # the block rotates clockwise (toward the downhill side) about its toe
+            assert a.mechanism[1, 2] < 0
+
+
+def test_toppling_is_not_rated_by_strength_reduction():
+    """Strength cannot control toppling: no misleading factor is returned."""
+    fos = rd.factor_of_safety(V.toppling_block(30.0, 0.9 * TAN(30) * 2.0, 2.0))
+    assert fos.value is None and fos.mode == "strength-independent"
+
+
+# ---------------------------------------------------------- two-block wedge
+@pytest.mark.parametrize(
+    "p1,p2,stable", [(35, 30, False), (35, 31, False), (36, 30, True), (35, 32, True)]
+)
+def test_wedge_verdicts(p1, p2, stable):
+    """The four rows of METHOD.md section 6: unstable where the thrust F > 0."""
+    thrust = V.wedge_thrust(200, 75, 37, 27, p1, p2, 35)
+    assert (thrust < 0) == stable
+    assert rd.analyse(V.two_block_wedge(p1, p2)).stable == stable
+
+
+@pytest.mark.parametrize(
+    "p1,p2,p3",
+    [(35, 30, 35), (35, 31, 35), (36, 30, 35), (35, 32, 35), (30, 35, 35), (40, 25, 30),
+     (38, 22, 35)],
+)
+def test_wedge_factor_of_safety(p1, p2, p3):
+    """SSR factor within 0.5% of the analytic root of Eq. 7 (tan(phi) / f);
+    (38, 22) separates: the passive block slides alone at tan22/tan27."""
+    exact = V.wedge_fos(200, 75, 37, 27, p1, p2, p3)
+    fos = rd.factor_of_safety(V.two_block_wedge(p1, p2, p3))
+    assert fos.value == pytest.approx(exact, rel=0.005)
+    if exact == pytest.approx(TAN(p2) / TAN(27)):  # separation: the passive block alone
+        assert fos.failed_analysis.unstable_blocks.tolist() == [2]
+    else:
+        assert sorted(fos.failed_analysis.unstable_blocks.tolist()) == [1, 2]
+
+
+# --------------------------------------------------------- jointed slope
+def test_bedded_slope_factor_of_safety():
+    """Bedding dipping 30 deg out of a 60 deg face, phi = 40, c = 0, vertical cross
+    joints, >= 400 blocks: FS within 1% of tan40 / tan30 = 1.4534."""
+    model = V.bedding_slope(bedding_spacing=1.0, cross_spacing=1.5)
+    assert model.blocks.n_blocks >= 400
+    fos = rd.factor_of_safety(model)
+    assert fos.value == pytest.approx(TAN(40) / TAN(30), rel=0.01)
+    # the mechanism: layers sliding down the bedding, out of the face
+    mech = fos.failed_analysis.mechanism[fos.failed_analysis.unstable]
+    moving = np.hypot(mech[:, 0], mech[:, 1]) > 0.5
+    angle = np.degrees(np.arctan2(-mech[moving, 1], mech[moving, 0]))
+    assert np.median(angle) == pytest.approx(30.0, abs=2.0)
+
+
+# --------------------------------------------------------- iteration headroom
+def test_newton_converges_with_headroom_on_the_wedge():
+    """Each stable wedge solve needs far fewer Newton iterations than the limit."""
+    fos = rd.factor_of_safety(V.two_block_wedge(36, 30))
+    limit = rd.Settings().max_iterations
+    for trial in fos.trials:
+        if trial.stable:
+            assert trial.evidence.iterations <= limit // 5
