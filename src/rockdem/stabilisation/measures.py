@@ -1,0 +1,235 @@
+"""Alternative measures side by side: a berm, a support force, block removal.
+
+The support force is found by search: the smallest anchor force at a given
+point and angle with which the staged analysis still finds equilibrium at
+the target factor (strengths divided by the target), bisected to a
+relative tolerance, then rated by a full strength-reduction search.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import InputError
+from ..model import Model, PointLoad
+from ..results import FactorOfSafety
+from . import _edit
+from .removal import Stabilisation, describe, mechanism_ids, meets, rate, stabilise, stable_at
+
+__all__ = ["Measure", "MeasureComparison", "SupportSearch", "compare_measures", "support_force"]
+
+#: default direction of a trial anchor: into the slope, 15 degrees below horizontal
+DEFAULT_ANGLE = 195.0
+
+
+@dataclass(frozen=True, eq=False)
+class SupportSearch:
+    """Result of :func:`support_force`.
+
+    Attributes
+    ----------
+    force : float or None
+        Smallest force found that reaches the target (None: not found up to
+        ``largest``).
+    at : (x, y)
+    angle : float
+        Direction of the force on the rock, degrees counter-clockwise from +x.
+    bracket : (float, float)
+        Largest force found short of the target, smallest found enough.
+    evaluations : int
+        Staged analyses made by the search.
+    fos : FactorOfSafety or None
+        Rating with ``force`` applied.
+    model : Model or None
+        The model with the support added.
+    """
+
+    force: float | None
+    at: tuple[float, float]
+    angle: float
+    bracket: tuple[float, float]
+    evaluations: int
+    fos: FactorOfSafety | None
+    model: Model | None
+
+
+def with_support(model: Model, at, angle: float, force: float, name: str = "trial anchor"):
+    """The model with one more support force (a :class:`PointLoad` with ``support=True``)."""
+    load = PointLoad.anchor(float(at[0]), float(at[1]), float(force), float(angle), name=name)
+    loads = model.loads
+    from dataclasses import replace
+
+    return model.replace(loads=replace(loads, points=(*loads.points, load)))
+
+
+def support_force(
+    model: Model,
+    target_fos: float,
+    *,
+    at: Sequence[float] | None = None,
+    angle: float = DEFAULT_ANGLE,
+    largest: float | None = None,
+    rtol: float = 0.02,
+    width: float = 0.01,
+) -> SupportSearch:
+    """Smallest support force at ``at`` and ``angle`` that reaches ``target_fos``.
+
+    Parameters
+    ----------
+    model : Model
+    target_fos : float
+    at : (x, y), optional
+        Point of application on the face.  Default: the point of the free
+        surface of the critical mechanism nearest its centroid.
+    angle : float
+        Direction of the force on the rock (default 195: pulling into the
+        slope, 15 degrees below horizontal, as a down-dipping anchor does).
+    largest : float, optional
+        Give up above this force (default: twice the weight of the free rock).
+    rtol : float
+        Relative width of the final force bracket.
+    width : float
+        Bracket width of the factor-of-safety rating.
+    """
+    b = model.blocks
+    total = float(b.weight[~b.fixed].sum())
+    largest = 2.0 * total if largest is None else float(largest)
+    if at is None:
+        mech = mechanism_ids(rate(model, width=width))
+        if not mech:
+            raise InputError("support", "no mechanism to support", "the slope has no failure")
+        at = _edit.exposed_point(model, mech)
+    at = (float(at[0]), float(at[1]))
+    count = 0
+
+    def enough(force: float) -> bool:
+        nonlocal count
+        count += 1
+        m = with_support(model, at, angle, force) if force > 0 else model
+        return stable_at(m, target_fos)
+
+    if enough(0.0):
+        return SupportSearch(0.0, at, angle, (0.0, 0.0), count, rate(model, width=width), model)
+    lo, hi = 0.0, 0.01 * total
+    while not enough(hi):
+        lo, hi = hi, 2 * hi
+        if hi > largest:
+            return SupportSearch(None, at, angle, (lo, np.inf), count, None, None)
+    while hi - lo > rtol * hi:
+        mid = 0.5 * (lo + hi)
+        if enough(mid):
+            hi = mid
+        else:
+            lo = mid
+    final = with_support(model, at, angle, hi)
+    return SupportSearch(hi, at, angle, (lo, hi), count, rate(final, width=width), final)
+
+
+@dataclass(frozen=True, eq=False)
+class Measure:
+    """One measure in the comparison (a row of the table)."""
+
+    kind: str  # "none", "berm", "support", "removal"
+    label: str
+    removed_area: float
+    support_force: float | None
+    fos: FactorOfSafety | None
+    reached: bool
+    note: str
+    model: Model | None
+
+    @property
+    def factor(self) -> float | None:
+        if self.fos is None:
+            return None
+        if self.fos.value is not None:
+            return float(self.fos.value)
+        return float(self.fos.bracket[0]) if self.fos.mode == "no-failure" else None
+
+
+@dataclass(frozen=True, eq=False)
+class MeasureComparison:
+    """Result of :func:`compare_measures`: the slope as it is, then each measure."""
+
+    target: float
+    measures: tuple[Measure, ...]
+    removal: Stabilisation | None
+    support: SupportSearch | None
+
+    def rows(self) -> list[dict]:
+        """One dict per measure: measure, removed area, support force, FS, reached, note."""
+        return [
+            {
+                "measure": m.label,
+                "kind": m.kind,
+                "removed_area": m.removed_area,
+                "support_force": m.support_force,
+                "factor_of_safety": m.factor,
+                "fos_text": describe(m.fos) if m.fos is not None else "-",
+                "reaches_target": m.reached,
+                "note": m.note,
+            }
+            for m in self.measures
+        ]
+
+
+def compare_measures(
+    model: Model,
+    target_fos: float = 1.3,
+    *,
+    berm: Sequence[Sequence[float]] | None = None,
+    support_at: Sequence[float] | None = None,
+    support_angle: float = DEFAULT_ANGLE,
+    support: bool = True,
+    removal: bool = True,
+    max_removal: float = 0.3,
+    max_rounds: int = 6,
+    width: float = 0.01,
+) -> MeasureComparison:
+    """The slope as it is, a berm, a support force and block removal, side by side.
+
+    Parameters
+    ----------
+    berm : list of (x, y), optional
+        The new ground profile of the berm design (left to right).
+    support_at, support_angle :
+        Where and in which direction the support force acts (see
+        :func:`support_force`); ``support=False`` skips it.
+    removal : bool
+        Run :func:`stabilise` for the removal row.
+    """
+    base = rate(model, width=width)
+    rows = [Measure("none", "slope as it is", 0.0, None, base, meets(base, target_fos),
+                    "", model)]
+    if berm is not None:
+        mb = _edit.cut_profile(model, berm)
+        fb = rate(mb, width=width)
+        _, area = _edit.removed_between(model, mb)
+        rows.append(Measure("berm", "berm (new profile)", area, None, fb,
+                            meets(fb, target_fos), "", mb))
+    search = None
+    if support:
+        search = support_force(model, target_fos, at=support_at, angle=support_angle,
+                               width=width)
+        at = f"({search.at[0]:.2f}, {search.at[1]:.2f})"
+        if search.force is None:
+            note = (f"at {at}, angle {search.angle:g}: not reached up to "
+                    f"{search.bracket[0]:.3g} (a single force cannot hold the mechanism)")
+            rows.append(Measure("support", "support force", 0.0, None, None, False, note, None))
+        else:
+            note = f"at {at}, angle {search.angle:g}; force bracket {search.bracket[0]:.3g}" \
+                   f"-{search.bracket[1]:.3g}"
+            rows.append(Measure("support", "support force", 0.0, search.force, search.fos,
+                                True, note, search.model))
+    stab = None
+    if removal:
+        stab = stabilise(model, target_fos, max_rounds=max_rounds, max_removal=max_removal,
+                         width=width)
+        f = stab.final
+        note = stab.message if stab.reached else f"{stab.message}; needs {stab.needs}"
+        rows.append(Measure("removal", f"block removal ({len(f.removed_blocks)} blocks)",
+                            f.removed_area, None, f.fos, stab.reached, note, f.model))
+    return MeasureComparison(target_fos, tuple(rows), stab, search)

@@ -1,0 +1,221 @@
+"""Excavation in stages, carrying the spring state from stage to stage.
+
+Stage 0 is the slope under its own weight (loads in steps).  Each further
+stage removes blocks, a region or everything above a new profile; the
+blocks that stay keep their displacement (translated to their new centroid
+if a cut trimmed them), and every interface that survives unchanged (same
+blocks, same end points) keeps its committed spring state: plastic slip,
+yield, tension failure and the stage of first failure.  The new equilibrium
+is then solved under the full load of the remaining blocks, so the joints
+that fail at each stage are reported stage by stage.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..analysis import _package, _settle, analyse
+from ..model import Model
+from ..results import Analysis, Evidence, Step
+from ..solver import System, build_system
+from ..spring_law import SpringState
+from . import _edit
+
+__all__ = ["Excavation", "Stage", "StageResult", "carry_state", "excavate_in_stages"]
+
+
+@dataclass(frozen=True)
+class Stage:
+    """One excavation stage: blocks, regions (polygons) and/or a new profile."""
+
+    name: str
+    blocks: tuple[int, ...] = ()
+    regions: tuple = ()
+    profile: tuple | None = None
+
+
+@dataclass(frozen=True, eq=False)
+class StageResult:
+    """The state after one stage.
+
+    Attributes
+    ----------
+    number : int
+        0 for the slope before excavation.
+    analysis : Analysis
+        Its equilibrium (or failure mechanism); ``first_failure`` of its
+        springs counts load steps first, then stages (see ``stage_step``).
+    stage_step : int
+        The step number this stage was solved as.
+    new_failures : ndarray of int
+        Interfaces (positions in ``analysis``) that failed during this stage.
+    removed_area : float
+        Area removed by this stage.
+    """
+
+    number: int
+    name: str
+    model: Model
+    analysis: Analysis
+    stage_step: int
+    new_failures: np.ndarray = field(repr=False)
+    removed_area: float = 0.0
+
+    @property
+    def stable(self) -> bool:
+        return self.analysis.stable
+
+
+@dataclass(frozen=True, eq=False)
+class Excavation:
+    """Result of :func:`excavate_in_stages`: one :class:`StageResult` per stage analysed."""
+
+    stages: tuple[StageResult, ...]
+    message: str
+
+    @property
+    def stable(self) -> bool:
+        return all(s.stable for s in self.stages)
+
+    def failures_by_stage(self) -> list[dict]:
+        """One row per failed interface: stage, blocks, kind, state."""
+        rows = []
+        for s in self.stages:
+            r = s.analysis.interfaces
+            for i in s.new_failures:
+                rows.append({"stage": s.number, "stage_name": s.name, "interface": int(i),
+                             "block_a": int(r.block_a[i]), "block_b": int(r.block_b[i]),
+                             "kind": str(r.kind[i]), "state": str(r.state_name[i])})
+        return rows
+
+
+def _keys(system: System) -> dict:
+    faces = system.interfaces
+    ids = system.blocks.ids
+    tol = system.blocks.tolerance
+    digits = max(int(-np.floor(np.log10(tol))) + 1, 3)
+    out = {}
+    for k in range(faces.n_interfaces):
+        key = (int(ids[faces.block_a[k]]), int(ids[faces.block_b[k]]),
+               *np.round(faces.start[k], digits), *np.round(faces.end[k], digits))
+        out[tuple(float(v) for v in key)] = k
+    return out
+
+
+def carry_state(old: System, state: SpringState, new: System) -> SpringState:
+    """The committed spring state of ``old`` mapped onto the springs of ``new``.
+
+    Interfaces are matched by their two block ids and end points; one found
+    with the opposite orientation takes its points in reverse order and its
+    slip with the opposite sign.  Everything else starts fresh.
+    """
+    m = new.springs.points_per_interface
+    if old.springs.points_per_interface != m:
+        raise ValueError("both systems need the same spring points per interface")
+    fresh = SpringState.initial(new.springs.n_springs)
+    slip, yielded = fresh.slip.copy(), fresh.yielded.copy()
+    broken, first = fresh.broken.copy(), fresh.first_failure.copy()
+    old_keys = _keys(old)
+    for key, k in _keys(new).items():
+        a, b, x0, y0, x1, y1 = key
+        sign, j = 1.0, old_keys.get(key)
+        if j is None:
+            j, sign = old_keys.get((b, a, x1, y1, x0, y0)), -1.0
+        if j is None:
+            continue
+        src = np.arange(j * m, (j + 1) * m)
+        if sign < 0:
+            src = src[::-1]
+        dst = np.arange(k * m, (k + 1) * m)
+        slip[dst] = sign * state.slip[src]
+        yielded[dst] = state.yielded[src]
+        broken[dst] = state.broken[src]
+        first[dst] = state.first_failure[src]
+    return SpringState(slip, yielded, broken, first)
+
+
+def _carry_q(old: System, disp: np.ndarray, new: System) -> np.ndarray:
+    """Displacements of surviving blocks (by id), moved to their new centroids."""
+    asm = new.assembly
+    q = np.zeros(asm.n_dof)
+    ob, nb = old.blocks, new.blocks
+    pos = {int(i): k for k, i in enumerate(ob.ids)}
+    for k in np.flatnonzero(~nb.fixed):
+        j = pos.get(int(nb.ids[k]))
+        if j is None:
+            continue
+        ux, uy, th = disp[j]
+        dx, dy = nb.centroid[k] - ob.centroid[j]
+        q[asm.dof[k]] = (ux - th * dy, uy + th * dx, th)
+    return q
+
+
+def excavate_in_stages(model: Model, stages: Sequence[Stage], *,
+                       carry: bool = True) -> Excavation:
+    """Analyse the slope, then each excavation stage in turn.
+
+    Parameters
+    ----------
+    model : Model
+        The slope before excavation.
+    stages : sequence of Stage
+    carry : bool
+        Carry the spring state and displacements forward (False: every
+        stage analysed fresh, for comparison).
+
+    Returns
+    -------
+    Excavation
+        Stops after the first unstable stage (later stages are not analysed).
+    """
+    system = build_system(model)
+    first = analyse(system)
+    results = [StageResult(0, "before excavation", model, first, len(first.steps),
+                           first.failed_interfaces, 0.0)]
+    if not first.stable:
+        return Excavation(tuple(results), "unstable before excavation")
+    prev_sys, prev = system, first
+    step = len(first.steps)
+    for k, st in enumerate(stages, start=1):
+        m = _edit.apply_removal(prev.system.model, st.blocks, st.regions, st.profile)
+        _, area = _edit.removed_between(prev.system.model, m)
+        sys_k = build_system(m)
+        step += 1
+        if carry:
+            state0 = carry_state(prev_sys, prev.state, sys_k)
+            q0 = _carry_q(prev_sys, prev.displacement, sys_k)
+            sol, state = _settle(sys_k, state0, q0, 1.0, 1.0, step)
+            ev = Evidence(sol.reason, sol.iterations, tuple(sol.residuals))
+            n_failed = int((state.yielded | state.broken).sum())
+            steps = (Step(step, 1.0, 1.0, sol.converged, ev, n_failed),)
+            if sol.converged:
+                a = _package(sys_k, sol, state, 1.0, 1.0, True, steps, sol.q)
+            else:
+                a = _package(sys_k, sol, state0, 0.0, 1.0, False, steps, q0)
+            before = _failed_keys(prev_sys, prev)
+            now = _keys(sys_k)
+            new = [i for key, i in now.items() if a.interfaces.state[i] > 0
+                   and key not in before and _flip(key) not in before]
+            new_failures = np.asarray(sorted(new), dtype=np.int64)
+        else:
+            a = analyse(sys_k)
+            new_failures = a.failed_interfaces
+        results.append(StageResult(k, st.name, m, a, step, new_failures, area))
+        if not a.stable:
+            return Excavation(tuple(results),
+                              f"stage {k} ({st.name}) is unstable; later stages not analysed")
+        prev_sys, prev = sys_k, a
+    return Excavation(tuple(results), f"all {len(stages)} stages stable")
+
+
+def _flip(key):
+    a, b, x0, y0, x1, y1 = key
+    return (b, a, x1, y1, x0, y0)
+
+
+def _failed_keys(system: System, a: Analysis) -> set:
+    keys = _keys(system)
+    return {key for key, i in keys.items() if a.interfaces.state[i] > 0}
