@@ -454,6 +454,64 @@ class AnalysisSpec(_Section):
     """Factor of safety search."""
 
 
+class TrialSpec(_Section):
+    """A stabilisation design to try: a removal from the model as it is."""
+
+    name: str
+    """Label of the trial in the report."""
+    remove: RemoveSpec
+    """What this design removes (blocks, regions and/or a new profile), counted from the
+    model as it is (after the top-level `remove`)."""
+    stabilise: bool = False
+    """Then remove mechanism blocks until the target factor of safety is reached (as
+    `rockdem stabilise` does), to see how much more removal the design needs."""
+
+
+class SupportSearchSpec(_Section):
+    """Where a support force is tried (the force itself is found by search)."""
+
+    at: Point | None = None
+    """Point of application on the face `[x, y]` (default: the free surface of the
+    critical mechanism, nearest its centroid)."""
+    angle: Number = 195.0
+    """Direction of the force on the rock in degrees counter-clockwise from +x (195:
+    into the slope, 15 degrees below horizontal, as a down-dipping anchor pulls)."""
+    largest: Positive | None = None
+    """Give up above this force (default: twice the weight of the free rock)."""
+
+
+class StageSpec(_Section):
+    """One excavation stage (bench): what it removes."""
+
+    name: str
+    """Label of the stage in the report."""
+    remove: RemoveSpec
+    """What this stage removes (blocks, regions and/or a new profile)."""
+
+
+class StabilisationSpec(_Section):
+    """Settings of `rockdem stabilise`: target, designs to compare, excavation stages."""
+
+    target_fos: Positive = 1.3
+    """Factor of safety the stabilisation must reach."""
+    max_rounds: Annotated[int, Field(ge=1), _AS_INTEGER] = 6
+    """Block-removal rounds before giving up."""
+    max_removal: Annotated[float, Field(gt=0.0, le=1.0, allow_inf_nan=False), _AS_NUMBER] = 0.3
+    """Largest share of the free rock (by area) that block removal may take."""
+    smallest_set: bool = True
+    """Look for a smaller set among the mechanism blocks (from the top down) when
+    removing all of them reaches the target."""
+    berm: list[Point] | None = Field(default=None, min_length=2)
+    """A berm design: the new ground profile `[[x, y], ...]` (left to right), compared
+    with the other measures."""
+    support: SupportSearchSpec | None = None
+    """Where to try a support force (null: on the critical mechanism, angle 195)."""
+    trials: list[TrialSpec] = []
+    """Removal designs to rate side by side (each from the model as it is)."""
+    stages: list[StageSpec] = []
+    """Excavation stages, analysed in order carrying the joint state forward."""
+
+
 class ModelFile(_Section):
     """A rockdem model file: a jointed rock slope section and how to analyse it.
 
@@ -495,6 +553,9 @@ class ModelFile(_Section):
     """Bolts and anchors."""
     analysis: AnalysisSpec = AnalysisSpec()
     """Analysis settings."""
+    stabilisation: StabilisationSpec = StabilisationSpec()
+    """Stabilisation design (`rockdem stabilise`): target factor of safety, berm,
+    support, removal trials and excavation stages."""
 
     @field_validator("joints", "materials")
     @classmethod
