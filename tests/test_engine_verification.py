@@ -102,8 +102,15 @@ def test_wedge_verdicts(p1, p2, stable):
 
 @pytest.mark.parametrize(
     "p1,p2,p3",
-    [(35, 30, 35), (35, 31, 35), (36, 30, 35), (35, 32, 35), (30, 35, 35), (40, 25, 30),
-     (38, 22, 35)],
+    [
+        (35, 30, 35),
+        (35, 31, 35),
+        (36, 30, 35),
+        (35, 32, 35),
+        (30, 35, 35),
+        (40, 25, 30),
+        (38, 22, 35),
+    ],
 )
 def test_wedge_factor_of_safety(p1, p2, p3):
     """SSR factor within 0.5% of the analytic root of Eq. 7 (tan(phi) / f);

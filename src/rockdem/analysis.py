@@ -41,14 +41,18 @@ def _settle(system, state, q0, load_factor, factor, stage, base_factor=None, tot
     scale = system.assembly.dof_scale
     f_norm = np.linalg.norm(load_factor * system.f_ext * scale)
     sol = solve_equilibrium(
-        system, state, load_factor=load_factor, strength_factor=factor, q0=q0,
+        system,
+        state,
+        load_factor=load_factor,
+        strength_factor=factor,
+        q0=q0,
         base_factor=base_factor,
     )
     iterations, history = sol.iterations, list(sol.residuals)
     for _ in range(MAX_CASCADE):
         if not sol.converged:
             break
-        dn, ds = system.assembly.relative_displacement(sol.q)
+        _, ds = system.assembly.relative_displacement(sol.q)
         new_state = commit(system.springs, state, sol.response, ds, stage)
         if total:
             new_state = new_state.without_slip()
@@ -58,13 +62,27 @@ def _settle(system, state, q0, load_factor, factor, stage, base_factor=None, tot
             sol = Solve(True, sol.q, resp, iterations, history, "converged", sol.direction)
             break
         sol = solve_equilibrium(
-            system, state, load_factor=load_factor, strength_factor=factor, q0=sol.q,
+            system,
+            state,
+            load_factor=load_factor,
+            strength_factor=factor,
+            q0=sol.q,
             base_factor=factor,
         )
         iterations += sol.iterations
         history += sol.residuals
-    out = Solve(sol.converged, sol.q, sol.response, iterations, history, sol.reason,
-                sol.direction, sol.reached, sol.reached_q, sol.failed_at)
+    out = Solve(
+        sol.converged,
+        sol.q,
+        sol.response,
+        iterations,
+        history,
+        sol.reason,
+        sol.direction,
+        sol.reached,
+        sol.reached_q,
+        sol.failed_at,
+    )
     return out, state
 
 
@@ -262,8 +280,13 @@ def factor_of_safety(
         F = reached if reached is not None and reached < F else F / grow
         if F < smallest:
             return FactorOfSafety(
-                None, (0.0, hi_an.strength_factor), "strength-independent", tuple(trials),
-                None, hi_an, _DEFINITION,
+                None,
+                (0.0, hi_an.strength_factor),
+                "strength-independent",
+                tuple(trials),
+                None,
+                hi_an,
+                _DEFINITION,
             )
         a = analyse(system, strength_factor=F)
         record(F, a)
@@ -281,8 +304,13 @@ def factor_of_safety(
             F = lo_an.strength_factor * grow
             if F > largest:
                 return FactorOfSafety(
-                    None, (lo_an.strength_factor, np.inf), "no-failure", tuple(trials),
-                    lo_an, None, _DEFINITION,
+                    None,
+                    (lo_an.strength_factor, np.inf),
+                    "no-failure",
+                    tuple(trials),
+                    lo_an,
+                    None,
+                    _DEFINITION,
                 )
         else:
             F = 0.5 * (lo_an.strength_factor + hi_F)

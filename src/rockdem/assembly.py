@@ -131,9 +131,7 @@ def build_assembly(blocks: Blocks, faces: Interfaces, springs: Springs) -> Assem
     scatter[valid] = inverse[: int(valid.sum())]
     indices = (unique % max(n_dof, 1)).astype(np.int32)
     col_of = unique // max(n_dof, 1)
-    indptr = np.concatenate([[0], np.cumsum(np.bincount(col_of, minlength=n_dof))]).astype(
-        np.int32
-    )
+    indptr = np.concatenate([[0], np.cumsum(np.bincount(col_of, minlength=n_dof))]).astype(np.int32)
     length_scale = float(np.sqrt(np.mean(np.abs(blocks.area)))) or 1.0
     return Assembly(
         dof,

@@ -123,6 +123,7 @@ class Blocks:
                 f"unit weight {gamma[bad[0]]} is negative or not finite",
                 "give a unit weight >= 0",
             )
+        _check_rings(vertices, offsets, label)
         area, _ = _area_centroid(vertices, offsets)
         signed = area.copy()
         # make counter-clockwise
@@ -272,6 +273,27 @@ def _area_centroid(vertices: np.ndarray, offsets: np.ndarray) -> tuple[np.ndarra
     with np.errstate(divide="ignore", invalid="ignore"):
         centroid = np.column_stack([cx, cy]) / (3.0 * area2)[:, None]
     return 0.5 * area2, centroid + origin
+
+
+def _check_rings(vertices: np.ndarray, offsets: np.ndarray, label) -> None:
+    """Reject outlines that cross themselves (before their area means anything)."""
+    block = np.repeat(np.arange(len(offsets) - 1), np.diff(offsets))
+    hull = shapely.area(shapely.convex_hull(shapely.multipoints(vertices, indices=block)))
+    flat = hull <= (GEOMETRY_RTOL * _extent(vertices)) ** 2 * 1e2
+    if flat.any():
+        raise InputError(
+            f"block {label[int(np.flatnonzero(flat)[0])]}",
+            "has zero area",
+            "give at least three vertices that are not collinear",
+        )
+    simple = shapely.is_simple(shapely.linearrings(vertices, indices=block))
+    if not simple.all():
+        i = int(np.flatnonzero(~simple)[0])
+        raise InputError(
+            f"block {label[i]}",
+            "outline crosses itself",
+            "list the vertices in order around the block",
+        )
 
 
 def _check_simple(blocks: Blocks, label) -> None:

@@ -65,7 +65,9 @@ class Joint:
         _check(where, "normal_stiffness", self.normal_stiffness, lo=0.0, open_lo=True)
         _check(where, "stiffness_ratio", self.stiffness_ratio, lo=0.0, open_lo=True)
         if self.shear_stiffness is None:
-            object.__setattr__(self, "shear_stiffness", self.normal_stiffness / self.stiffness_ratio)
+            object.__setattr__(
+                self, "shear_stiffness", self.normal_stiffness / self.stiffness_ratio
+            )
         _check(where, "shear_stiffness", self.shear_stiffness, lo=0.0, open_lo=True)
         _check(where, "friction_angle", self.friction_angle, lo=0.0, hi=90.0)
         _check(where, "cohesion", self.cohesion, lo=0.0)

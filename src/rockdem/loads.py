@@ -88,7 +88,9 @@ def _split_line_loads(blocks: Blocks, loads: Loads):
             raise InputError(
                 name, "does not lie on block boundaries all along", "move it onto the surface"
             )
-        mids = shapely.get_coordinates(shapely.line_interpolate_point(pieces[ok], 0.5, normalized=True))
+        mids = shapely.get_coordinates(
+            shapely.line_interpolate_point(pieces[ok], 0.5, normalized=True)
+        )
         xy.append(mids - shift)
         forces.append(np.outer(lengths[ok], q))
         names += [name] * int(ok.sum())

@@ -202,13 +202,15 @@ class FactorOfSafety:
         if self.value is None:
             return f"<FactorOfSafety: none ({self.mode}), bracket {self.bracket}>"
         lo, hi = self.bracket
-        return f"<FactorOfSafety: {self.value:.4f} in [{lo:.4f}, {hi:.4f}], {len(self.trials)} trials>"
+        return (
+            f"<FactorOfSafety: {self.value:.4f} in [{lo:.4f}, {hi:.4f}], {len(self.trials)} trials>"
+        )
 
 
 def tabulate(system: System, state: SpringState, resp, strength_factor: float, reduce_tensile):
     """Spring and interface tables from a response and its committed state."""
     springs = system.springs
-    c, tan_phi, tensile = strength(springs, state, 1.0, reduce_tensile)
+    c, tan_phi, _ = strength(springs, state, 1.0, reduce_tensile)
     cap = np.where(resp.open, 0.0, np.maximum(c + resp.sigma * tan_phi, 0.0))
     sp_res = SpringResults(
         springs.interface,

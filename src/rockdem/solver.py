@@ -132,9 +132,7 @@ def residual(system: System, q, state, load_factor, factor):
     """Response and out-of-balance force at displacements q."""
     asm = system.assembly
     dn, ds = asm.relative_displacement(q)
-    resp = evaluate(
-        system.springs, state, dn, ds, factor, system.model.settings.reduce_tensile
-    )
+    resp = evaluate(system.springs, state, dn, ds, factor, system.model.settings.reduce_tensile)
     r = load_factor * system.f_ext - asm.internal_force(resp.force)
     return resp, r
 
@@ -257,8 +255,9 @@ def solve_equilibrium(
         history += trial.residuals
         if trial.converged:
             if F_try == target:
-                return Solve(True, trial.q, trial.response, total, history, "converged",
-                             trial.direction)
+                return Solve(
+                    True, trial.q, trial.response, total, history, "converged", trial.direction
+                )
             F_ok, q_ok = F_try, trial.q
             step = 1.5 * step
             if (target - F_ok) * (target - F_ok - step) <= 0:  # do not overshoot
@@ -268,5 +267,15 @@ def solve_equilibrium(
             step = 0.5 * step
             if abs(step) < HOMOTOPY_MIN_STEP * abs(target):
                 reason = f"no equilibrium beyond strength factor {F_ok:.6g} ({last.reason})"
-                return Solve(False, last.q, last.response, total, history, reason,
-                             last.direction, F_ok, q_ok, F_try)
+                return Solve(
+                    False,
+                    last.q,
+                    last.response,
+                    total,
+                    history,
+                    reason,
+                    last.direction,
+                    F_ok,
+                    q_ok,
+                    F_try,
+                )

@@ -45,9 +45,7 @@ class SpringState:
 
     @classmethod
     def initial(cls, n: int) -> SpringState:
-        return cls(
-            np.zeros(n), np.zeros(n, dtype=bool), np.zeros(n, dtype=bool), np.full(n, -1)
-        )
+        return cls(np.zeros(n), np.zeros(n, dtype=bool), np.zeros(n, dtype=bool), np.full(n, -1))
 
     def without_slip(self) -> SpringState:
         """The same failure flags with the plastic slip set to zero."""

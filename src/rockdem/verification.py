@@ -34,7 +34,9 @@ def block_on_plane(
 ) -> Model:
     """A ``width x height`` block on a fixed plane dipping ``dip`` degrees toward +x."""
     R = _rot(-dip)
-    ground = np.array([(-4 * width, -height), (4 * width, -height), (4 * width, 0), (-4 * width, 0)])
+    ground = np.array(
+        [(-4 * width, -height), (4 * width, -height), (4 * width, 0), (-4 * width, 0)]
+    )
     block = np.array([(0, 0), (width, 0), (width, height), (0, height)])
     blocks = Blocks.from_polygons(
         [ground @ R.T, block @ R.T], fixed=[True, False], unit_weight=unit_weight
@@ -55,8 +57,9 @@ def sliding_fos(dip, phi, *, cohesion=0.0, length=1.0, weight=1.0, k=0.0) -> flo
 
 
 # ------------------------------------------------------------------ toppling
-def toppling_block(dip: float, width: float, height: float, friction_angle: float = 80.0,
-                   kn: float = 1e6) -> Model:
+def toppling_block(
+    dip: float, width: float, height: float, friction_angle: float = 80.0, kn: float = 1e6
+) -> Model:
     """A ``width x height`` block on a base dipping ``dip``; it topples iff
     ``width / height < tan(dip)`` (friction high enough not to slide)."""
     return block_on_plane(
@@ -79,14 +82,17 @@ def wedge_fos(w1, w2, d1, d2, p1, p2, p3) -> float:
     zero; where the interface force at that root is tensile the blocks
     separate and the weaker single block governs (METHOD.md section 6).
     """
+
     def reduced(f):
         return [np.degrees(np.arctan(np.tan(np.radians(p)) / f)) for p in (p1, p2, p3)]
 
     def thrust(f):
         return wedge_thrust(w1, w2, d1, d2, *reduced(f))
 
-    single = min(np.tan(np.radians(p1)) / np.tan(np.radians(d1)),
-                 np.tan(np.radians(p2)) / np.tan(np.radians(d2)))
+    single = min(
+        np.tan(np.radians(p1)) / np.tan(np.radians(d1)),
+        np.tan(np.radians(p2)) / np.tan(np.radians(d2)),
+    )
     f = brentq(thrust, 0.2, 5.0, xtol=1e-12)
     q1, _, q3 = np.radians(reduced(f))
     d = np.radians(d1)
@@ -119,8 +125,13 @@ def two_block_wedge(
     L, h1, h2 = 10.0, 4.0, 3.0
     active = [(-L, L * t1), (0, 0), (0, h1), (-L, L * t1 + h1)]
     passive = [(0, 0), (L, -L * t2), (L, -L * t2 + h2), (0, h2)]
-    ground = [(-1.5 * L, 1.5 * L * t1), (0, 0), (1.5 * L, -1.5 * L * t2),
-              (1.5 * L, -1.5 * L * t2 - 5), (-1.5 * L, -1.5 * L * t2 - 5)]
+    ground = [
+        (-1.5 * L, 1.5 * L * t1),
+        (0, 0),
+        (1.5 * L, -1.5 * L * t2),
+        (1.5 * L, -1.5 * L * t2 - 5),
+        (-1.5 * L, -1.5 * L * t2 - 5),
+    ]
     blocks = Blocks.from_polygons(
         [ground, active, passive],
         fixed=[True, False, False],
@@ -202,8 +213,14 @@ def bedding_slope(
     corners = np.stack([origin, origin + u, origin + u + v, origin + v], axis=-2).reshape(-1, 4, 2)
     polys = _cut_convex(section, shapely.polygons(corners))
     # fixed ground: below the toe level and behind the back of the section
-    ground = [(-behind - 5, -5), (toe_x + 20, -5), (toe_x + 20, 0), (-behind, 0),
-              (-behind, height + 5), (-behind - 5, height + 5)]
+    ground = [
+        (-behind - 5, -5),
+        (toe_x + 20, -5),
+        (toe_x + 20, 0),
+        (-behind, 0),
+        (-behind, height + 5),
+        (-behind - 5, height + 5),
+    ]
     blocks = Blocks.from_polygons(
         [ground, *polys],
         fixed=[True] + [False] * len(polys),
@@ -214,8 +231,14 @@ def bedding_slope(
     return Model(blocks, joint, settings=settings or Settings(load_steps=1), name="bedding slope")
 
 
-def brick_slope(n_blocks: int, *, friction_angle: float = 35.0, face_angle: float = 70.0,
-                kn: float = 1e6, settings: Settings | None = None) -> Model:
+def brick_slope(
+    n_blocks: int,
+    *,
+    friction_angle: float = 35.0,
+    face_angle: float = 70.0,
+    kn: float = 1e6,
+    settings: Settings | None = None,
+) -> Model:
     """A brick-pattern slope (horizontal bedding, staggered cross joints) with
     about ``n_blocks`` blocks, for benchmarks."""
     # blocks ~ area / (b * h) with area of the section ~ 2.1 * H^2 (behind = 2H)

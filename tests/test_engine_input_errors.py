@@ -1,0 +1,88 @@
+"""Bad input to the API raises one error class naming the item and the fix."""
+
+import numpy as np
+import pytest
+
+import rockdem as rd
+
+GROUND = [(-5, -1), (5, -1), (5, 0), (-5, 0)]
+BLOCK = [(0, 0), (1, 0), (1, 1), (0, 1)]
+
+
+def _blocks(*polys, fixed=None):
+    fixed = [True] + [False] * (len(polys) - 1) if fixed is None else fixed
+    return rd.Blocks.from_polygons(list(polys), fixed=fixed, unit_weight=25.0)
+
+
+def _joint(**kw):
+    return rd.Joint(**{"normal_stiffness": 1e6, "friction_angle": 30, **kw})
+
+
+@pytest.mark.parametrize(
+    "polys,where,words",
+    [
+        ([GROUND, [(0, 0), (1, 0), (2, 0)]], "block 1", "zero area"),
+        ([GROUND, [(0, 0), (1, 1), (1, 0), (0, 1)]], "block 1", "crosses itself"),
+        ([GROUND, BLOCK, [(0.5, 0), (1.5, 0), (1.5, 1), (0.5, 1)]], "blocks 1 and 2", "overlap"),
+        ([GROUND, [(0, 0), (1, 0), (np.nan, 1)]], "block 1", "not finite"),
+    ],
+)
+def test_bad_blocks(polys, where, words):
+    with pytest.raises(rd.InputError, match=words) as err:
+        _blocks(*polys)
+    assert str(err.value).startswith(where)
+    assert err.value.fix  # every message says what to do
+
+
+def test_block_touching_nothing():
+    floating = [(3, 2), (4, 2), (4, 3), (3, 3)]
+    model = rd.Model(_blocks(GROUND, BLOCK, floating), _joint())
+    with pytest.raises(rd.InputError, match="touches no other block") as err:
+        rd.analyse(model)
+    assert str(err.value).startswith("block 2")
+
+
+@pytest.mark.parametrize(
+    "kw,key",
+    [
+        ({"normal_stiffness": -1.0}, "normal_stiffness"),
+        ({"shear_stiffness": 0.0}, "shear_stiffness"),
+        ({"friction_angle": 90.0}, "friction_angle"),
+        ({"friction_angle": 95.0}, "friction_angle"),
+        ({"cohesion": -1.0}, "cohesion"),
+        ({"tensile_strength": float("inf")}, "tensile_strength"),
+    ],
+)
+def test_bad_joint(kw, key):
+    with pytest.raises(rd.InputError) as err:
+        _joint(name="bedding", **kw)
+    assert f"joint 'bedding' {key}" in str(err.value)
+    assert err.value.fix
+
+
+def test_errors_are_one_class_and_a_value_error():
+    assert issubclass(rd.InputError, rd.RockdemError)
+    assert issubclass(rd.InputError, ValueError)
+
+
+def test_unknown_joint_name_in_lines():
+    with pytest.raises(rd.InputError, match="is not defined"):
+        rd.Model(
+            _blocks(GROUND, BLOCK), _joint(), joint_lines=[[(0, 0), (1, 0)]], line_joint=["nope"]
+        )
+
+
+def test_point_load_off_the_model():
+    load = rd.PointLoad(x=50.0, y=50.0, fx=0.0, fy=-10.0, name="crane")
+    model = rd.Model(_blocks(GROUND, BLOCK), _joint(), loads=rd.Loads(points=(load,)))
+    with pytest.raises(rd.InputError, match="crane"):
+        rd.analyse(model)
+
+
+def test_the_model_is_not_changed_by_an_analysis():
+    model = rd.Model(_blocks(GROUND, BLOCK), _joint())
+    before = model.blocks.vertices.copy()
+    rd.factor_of_safety(model)
+    assert np.array_equal(model.blocks.vertices, before)
+    with pytest.raises(ValueError):  # arrays are read-only
+        model.blocks.vertices[0, 0] = 1.0

@@ -1,0 +1,75 @@
+"""Results must not depend on block order, on where the origin is, on the unit
+system, or on the absolute spring stiffness (c = 0)."""
+
+import numpy as np
+import pytest
+
+import rockdem as rd
+from rockdem import verification as V
+
+
+def _model(kn=1e6, shift=(0.0, 0.0), scale=1.0, order=None, c=0.0):
+    """The 66-block bedded slope, transformed; lengths x scale, forces consistently."""
+    base = V.bedding_slope(bedding_spacing=3.0, cross_spacing=4.5)
+    b = base.blocks
+    polys = [b.outline(i) * scale + np.asarray(shift) for i in range(b.n_blocks)]
+    ids = np.arange(b.n_blocks)
+    order = np.arange(b.n_blocks) if order is None else order
+    blocks = rd.Blocks.from_polygons(
+        [polys[i] for i in order],
+        fixed=b.fixed[order],
+        unit_weight=26.0,  # weight per area: forces scale as length^2, stresses as length
+        ids=ids[order],
+    )
+    # stiffness is stress per length: keeps displacement / length unchanged
+    joint = rd.Joint(normal_stiffness=kn, friction_angle=40, cohesion=c * scale)
+    return rd.Model(blocks, joint, settings=base.settings)
+
+
+def _summary(model):
+    fos = rd.factor_of_safety(model)
+    failed = fos.failed_analysis
+    faces = failed.interfaces
+    pairs = {
+        tuple(sorted((int(a), int(b))))
+        for a, b, s in zip(faces.block_a, faces.block_b, faces.state, strict=True)
+        if s > 0
+    }
+    return fos, set(failed.unstable_blocks.tolist()), pairs
+
+
+@pytest.fixture(scope="module")
+def reference():
+    return _summary(_model())
+
+
+def test_renumbering_blocks(reference):
+    order = np.random.default_rng(3).permutation(66)
+    fos, unstable, failed = _summary(_model(order=order))
+    assert fos.value == pytest.approx(reference[0].value, rel=1e-6)
+    assert unstable == reference[1] and failed == reference[2]
+
+
+def test_translating_coordinates(reference):
+    fos, unstable, failed = _summary(_model(shift=(1e4, -1e4)))
+    assert fos.value == pytest.approx(reference[0].value, rel=1e-6)
+    assert unstable == reference[1] and failed == reference[2]
+
+
+def test_scaling_lengths_by_ten(reference):
+    fos, unstable, failed = _summary(_model(scale=10.0, kn=1e6 / 10.0))
+    assert fos.value == pytest.approx(reference[0].value, rel=1e-6)
+    assert unstable == reference[1] and failed == reference[2]
+
+
+@pytest.mark.parametrize("kn", [1e3, 1e9])
+def test_absolute_stiffness_does_not_matter_without_cohesion(reference, kn):
+    fos, unstable, failed = _summary(_model(kn=kn))
+    assert fos.bracket == pytest.approx(reference[0].bracket, rel=1e-9)
+    assert unstable == reference[1] and failed == reference[2]
+
+
+def test_displacements_scale_with_one_over_stiffness():
+    a1 = rd.analyse(_model(kn=1e6))
+    a2 = rd.analyse(_model(kn=1e8))
+    assert np.allclose(a1.displacement, 100 * a2.displacement, rtol=1e-6, atol=0)
