@@ -342,3 +342,22 @@ def test_subprocess_report_of_the_example(tmp_path):
     p = subprocess.run(cmd, capture_output=True, text=True, cwd=tmp_path, env=env, timeout=120)
     assert p.returncode == 2 and p.stdout == ""
     assert "exists already" in p.stderr and "Traceback" not in p.stderr
+
+
+# --------------------------------------------------------------- stabilise
+def test_stabilise_is_registered_when_its_module_exists():
+    pytest.importorskip("rockdem.cli_stabilise")
+    r = invoke("stabilise", "--help")
+    assert r.exit_code == 0 and "Usage: rockdem stabilise" in r.stdout
+
+
+def test_the_command_line_works_without_the_stabilise_module():
+    code = (
+        "import sys; sys.modules['rockdem.cli_stabilise'] = None\n"
+        "from typer.testing import CliRunner\n"
+        "from rockdem.cli import app\n"
+        "r = CliRunner().invoke(app, ['--help'])\n"
+        "assert r.exit_code == 0 and 'report' in r.stdout and 'stabilise' not in r.stdout\n"
+    )
+    p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
+    assert p.returncode == 0, p.stderr

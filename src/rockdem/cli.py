@@ -858,6 +858,16 @@ def example_copy(
         out.print(f"next: rockdem check {escape(str(target))}")
 
 
+# --------------------------------------------------------------- stabilise
+try:  # written separately; registered when its module is present
+    from .cli_stabilise import stabilise as _stabilise
+except ModuleNotFoundError as exc:  # only the module itself may be missing
+    if exc.name != f"{__package__}.cli_stabilise":
+        raise
+else:
+    app.command("stabilise")(_stabilise)
+
+
 def main() -> None:
     """Console script entry point (``rockdem``, ``python -m rockdem``)."""
     app(prog_name="rockdem")
