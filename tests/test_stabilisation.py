@@ -1,0 +1,166 @@
+"""Stabilisation: support-force search, removal loop, staged excavation, CLI, pictures."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+import typer
+from typer.testing import CliRunner
+
+import rockdem as rd
+from rockdem.cli_stabilise import stabilise as stabilise_command
+from rockdem.config import load_model
+from rockdem.examples import example_path
+from rockdem.geometry import JointSet, Profile, generate_slope
+from rockdem.solver import build_system
+from rockdem.stabilisation import (
+    Stage,
+    carry_state,
+    compare_measures,
+    excavate_in_stages,
+    save_pictures,
+    stabilise,
+    support_force,
+)
+from rockdem.verification import two_block_wedge, wedge_thrust
+
+pytestmark = pytest.mark.filterwarnings("ignore::DeprecationWarning")
+
+
+# ------------------------------------------------------------- support
+def test_support_force_matches_the_wedge_thrust():
+    """Eq. 7's F is the horizontal thrust the passive block needs at F = 1."""
+    model = two_block_wedge(35, 30)
+    exact = wedge_thrust(200, 75, 37, 27, 35, 30, 35)
+    toe_face = (10.0, -10 * np.tan(np.radians(27)) + 1.0)
+    s = support_force(model, 1.0, at=toe_face, angle=180, rtol=0.002)
+    assert s.force is not None
+    assert s.bracket[0] <= exact * 1.003 and abs(s.force - exact) / exact < 0.005
+    assert s.fos is not None and s.fos.bracket[0] >= 0.99
+    # a stable variant needs none
+    assert support_force(two_block_wedge(36, 30), 1.0, at=toe_face, angle=180).force == 0.0
+
+
+def test_support_force_grows_with_the_target():
+    model = two_block_wedge(35, 30)
+    at = (10.0, -10 * np.tan(np.radians(27)) + 1.0)
+    f1 = support_force(model, 1.0, at=at, angle=180).force
+    f2 = support_force(model, 1.2, at=at, angle=180).force
+    assert f2 > f1 > 0
+
+
+# ------------------------------------------------------------- removal
+def test_every_trial_reports_blocks_area_and_factor():
+    model, _ = load_model(example_path("inclined-layers"))
+    seen = []
+    s = stabilise(model, 1.0, progress=seen.append)
+    assert len(seen) == len(s.trials) >= 2
+    assert s.trials[0].removed_blocks == () and s.trials[0].removed_area == 0
+    areas = model.blocks.area[model.blocks.index_of(list(s.final.removed_blocks))]
+    assert s.final.removed_area == pytest.approx(areas.sum())
+    assert s.reached and s.final.fos.bracket[0] >= 1.0
+    assert sum(t.accepted for t in s.trials) == 1 + s.final.round
+    assert all(t.factor is not None for t in s.trials)
+
+
+def test_removal_limit_stops_with_a_message():
+    model, _ = load_model(example_path("inclined-layers"))
+    s = stabilise(model, 1.0, max_removal=0.02)
+    assert not s.reached and "limit 2%" in s.message and s.needs
+    assert s.final is s.trials[0]
+
+
+def test_compare_measures_side_by_side():
+    model = two_block_wedge(35, 30)
+    at = (10.0, -10 * np.tan(np.radians(27)) + 1.0)
+    c = compare_measures(model, 1.0, support_at=at, support_angle=180, removal=False)
+    kinds = [m.kind for m in c.measures]
+    assert kinds == ["none", "support"]
+    rows = c.rows()
+    assert rows[0]["reaches_target"] is False and rows[1]["reaches_target"] is True
+    assert rows[1]["support_force"] == pytest.approx(wedge_thrust(200, 75, 37, 27, 35, 30, 35),
+                                                     rel=0.03)
+
+
+# -------------------------------------------------------------- stages
+J = rd.Joint(normal_stiffness=1e5, friction_angle=40, name="j")
+
+
+@pytest.fixture(scope="module")
+def flat():
+    sets = [JointSet("bedding", 35, 1.0, J, origin=(0, 0.3)),
+            JointSet("cross", 90, 1.5, J, origin=(0.2, 0))]
+    g = generate_slope(Profile([(-10, 5), (6, 5)]), sets, depth=6, unit_weight=2.6,
+                       ground_joint=J)
+    return g.model()
+
+
+def test_carry_state_onto_the_same_system_is_the_identity(flat):
+    a = rd.analyse(flat)
+    s = carry_state(a.system, a.state, a.system)
+    assert np.array_equal(s.slip, a.state.slip)
+    assert np.array_equal(s.first_failure, a.state.first_failure)
+    other = build_system(flat.replace(blocks=flat.blocks))
+    assert np.array_equal(carry_state(a.system, a.state, other).yielded, a.state.yielded)
+
+
+def test_excavation_in_stages_reports_failures_per_stage(flat):
+    stages = [Stage("bench 1", profile=((-10, 5), (-3, 5), (-2.3, 2.5), (6, 2.5))),
+              Stage("bench 2", profile=((-10, 5), (-3, 5), (-2.3, 2.5), (0, 2.5), (0.7, 0),
+                                         (6, 0)))]
+    ex = excavate_in_stages(flat, stages)
+    assert ex.stages[0].stable and ex.stages[0].removed_area == 0
+    assert len(ex.stages) >= 2 and ex.stages[1].removed_area > 0
+    rows = ex.failures_by_stage()
+    assert {r["stage"] for r in rows} <= {s.number for s in ex.stages}
+    # joints failed before a stage keep their first failure step
+    s1 = ex.stages[1].analysis
+    ff = s1.interfaces.first_failure
+    assert (ff[(ff >= 0)] <= ex.stages[1].stage_step).all()
+    assert (s1.state.first_failure[s1.state.first_failure >= 0] < ex.stages[1].stage_step).any()
+    fresh = excavate_in_stages(flat, stages, carry=False)
+    assert len(fresh.stages) >= 2
+
+
+# ----------------------------------------------------------------- CLI
+@pytest.fixture(scope="module")
+def app():
+    a = typer.Typer()
+    a.command()(stabilise_command)
+    a.command("noop")(lambda: None)
+    return a
+
+
+def test_cli_json_and_files(app, tmp_path):
+    r = CliRunner().invoke(app, ["stabilise", "--example", "inclined-layers", "--no-support",
+                                 "--json", "--out", str(tmp_path / "res")])
+    assert r.exit_code == 0, r.output
+    doc = json.loads(r.stdout)
+    assert doc["reached"] is True and doc["target_fos"] == 1.0
+    assert [d["design"] for d in doc["designs"]] == ["upper blocks", "all unstable blocks",
+                                                      "berm"]
+    files = {p.name for p in (tmp_path / "res").iterdir()}
+    assert {"stabilisation.json", "removal.csv", "measures.csv", "trial-00.png"} <= files
+
+
+def test_cli_toppling_says_what_else_is_needed(app):
+    r = CliRunner().invoke(app, ["stabilise", "--example", "toppling", "--no-support",
+                                 "--target-fos", "1.3"])
+    assert r.exit_code == 0, r.output
+    assert "NOT REACHED" in r.output and "toppling" in r.output and "needed instead" in r.output
+
+
+def test_cli_bad_target_is_an_input_error(app):
+    r = CliRunner().invoke(app, ["stabilise", "--example", "wedge-verification",
+                                 "--target-fos", "0"])
+    assert r.exit_code == 2
+
+
+def test_pictures_one_per_trial(tmp_path):
+    model, _ = load_model(example_path("inclined-layers"))
+    s = stabilise(model, 1.0, smallest_set=False)
+    files = save_pictures(s, tmp_path)
+    assert [f.name for f in files] == [f"trial-{t.number:02d}.png" for t in s.trials]
+    assert all(f.stat().st_size > 10_000 for f in files)
