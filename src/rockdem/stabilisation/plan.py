@@ -188,13 +188,17 @@ def trial_picture(trial, original: Model, target: float, *, ax=None, title: str 
     """Draw one trial: its failure state at the critical factor, removed blocks dashed."""
     from matplotlib.collections import PolyCollection
 
+    from ..analysis import analyse
     from ..plots import plot_failure
 
-    shown = trial.fos.failed_analysis or trial.fos.stable_analysis
+    if trial.fos.mode == "strength-independent":  # show the mechanism under the loads as they are
+        shown = analyse(trial.model)
+    else:
+        shown = trial.fos.failed_analysis or trial.fos.stable_analysis
     if title is None:
         title = (f"trial {trial.number}: {trial.label}\n{len(trial.removed_blocks)} blocks "
-                 f"removed (area {trial.removed_area:.2f}), FS {describe(trial.fos)} "
-                 f"(target {target:g})")
+                 f"removed (area {trial.removed_area:.2f}), FS {describe(trial.fos)}, "
+                 f"target {target:g}")
     ax = plot_failure(shown, ax=ax, title=title)
     b = original.blocks
     removed = [v for v, i in zip(b.polygons(), b.ids, strict=True) if int(i) in

@@ -206,6 +206,9 @@ def stabilise(
         if meets(current.fos, target_fos):
             break
         mech = current.mechanism
+        if current.fos.mode == "strength-independent":
+            # no factor brackets it: remove what moves under the loads as they are
+            mech = tuple(int(i) for i in analyse(current.model).unstable_blocks)
         if not mech:
             return _done(target_fos, trials, False,
                          "no moving blocks were found to remove",
@@ -275,8 +278,8 @@ def _too_much(current: RemovalTrial, mech, share, limit) -> tuple[str, str]:
         return (
             f"block removal cannot reach the target: the mechanism is toppling (it forms "
             f"whatever the joint strength) and removing its {len(mech)} blocks would take "
-            f"{100 * share:.0f}% of the rock (limit {100 * limit:.0f}%); each removal "
-            "exposes new columns that topple in turn",
+            f"{100 * share:.0f}% of the rock (limit {100 * limit:.0f}%): the whole "
+            "toppling zone would have to go",
             "support that ties the toppling columns back to stable rock (anchors or bolts "
             "across the near-vertical joints), or a flatter profile that shortens the columns",
         )
