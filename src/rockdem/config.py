@@ -1266,7 +1266,10 @@ def _from_engine(
     where = exc.where
     loc: Loc = ()
     m = _BLOCK.match(where)
-    if cfg.blocks is not None and m and int(m.group(1)) in ids:
+    j = re.match(r"joint '(.+)' (\w+)$", where)
+    if j and j.group(1) in cfg.joints:
+        loc, label = ("joints", j.group(1), j.group(2)), ""
+    elif cfg.blocks is not None and m and int(m.group(1)) in ids:
         loc = ("blocks", ids[int(m.group(1))])
         label = where
     elif where in names:

@@ -64,11 +64,20 @@ class Joint:
         where = f"joint {self.name!r}"
         _check(where, "normal_stiffness", self.normal_stiffness, lo=0.0, open_lo=True)
         _check(where, "stiffness_ratio", self.stiffness_ratio, lo=0.0, open_lo=True)
-        if self.shear_stiffness is None:
+        ks_given = self.shear_stiffness is not None
+        if not ks_given:
             object.__setattr__(
                 self, "shear_stiffness", self.normal_stiffness / self.stiffness_ratio
             )
         _check(where, "shear_stiffness", self.shear_stiffness, lo=0.0, open_lo=True)
+        ratio = self.normal_stiffness / self.shear_stiffness
+        if not 1e-2 <= ratio <= 1e2:
+            key = "shear_stiffness" if ks_given else "stiffness_ratio"
+            raise InputError(
+                f"{where} {key}",
+                f"kn / ks = {ratio:.3g} is out of range",
+                "use kn / ks between 0.01 and 100 (2 to 3 for rock: 2 (1 + nu))",
+            )
         _check(where, "friction_angle", self.friction_angle, lo=0.0, hi=90.0)
         _check(where, "cohesion", self.cohesion, lo=0.0)
         _check(where, "tensile_strength", self.tensile_strength, lo=0.0)
