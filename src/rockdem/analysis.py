@@ -15,6 +15,8 @@ from collections.abc import Callable
 
 import numpy as np
 import scipy.sparse.linalg as spla
+from scipy.sparse import coo_array
+from scipy.sparse.csgraph import connected_components
 
 from .model import Model
 from .results import Analysis, Evidence, FactorOfSafety, Step, Trial, tabulate
@@ -27,9 +29,13 @@ log = logging.getLogger(__name__)
 MAX_CASCADE = 100
 #: a block moves in the mechanism if its motion exceeds this share of the largest
 MECHANISM_SHARE = 0.01
+#: a spring point holds when its strength exceeds its shear stress by this factor
+HOLD_MARGIN = 1.01
 
 
-def _settle(system, state, q0, load_factor, factor, stage, base_factor=None, total=False):
+def _settle(
+    system, state, q0, load_factor, factor, stage, base_factor=None, total=False, resolution=None
+):
     """Solve at one load level, re-solving while committed failures shed strength.
 
     Returns ``(solve, state)``; the state is committed only if the solve
@@ -47,6 +53,7 @@ def _settle(system, state, q0, load_factor, factor, stage, base_factor=None, tot
         strength_factor=factor,
         q0=q0,
         base_factor=base_factor,
+        resolution=resolution,
     )
     iterations, history = sol.iterations, list(sol.residuals)
     for _ in range(MAX_CASCADE):
@@ -121,8 +128,35 @@ def _mechanism(system: System, sol: Solve, state, load_factor, factor):
     return out / top, motion > MECHANISM_SHARE * top
 
 
-def _package(system, sol, state, load_factor, factor, stable, steps, q_ok):
-    """Assemble an :class:`Analysis` from the last solve."""
+def _held(system: System, resp) -> np.ndarray:
+    """Blocks joined to the fixed ground through holding interfaces.
+
+    An interface holds when at least two of its spring points are closed and
+    sticking with a margin (two points restrain all three relative motions;
+    one point is a hinge).  Blocks that no chain of holding interfaces ties
+    to the ground are free to move: the candidates of the mechanism.
+    """
+    faces, springs = system.interfaces, system.springs
+    m = springs.points_per_interface
+    margin = resp.capacity > HOLD_MARGIN * np.abs(resp.tau)
+    sticking = (~resp.open & ~resp.sliding & margin).reshape(-1, m)
+    holds = sticking.sum(axis=1) >= min(2, m)
+    n = system.blocks.n_blocks
+    ground = n  # all fixed blocks are one node
+    a = np.where(system.blocks.fixed[faces.block_a], ground, faces.block_a)[holds]
+    b = np.where(system.blocks.fixed[faces.block_b], ground, faces.block_b)[holds]
+    graph = coo_array((np.ones(len(a)), (a, b)), shape=(n + 1, n + 1))
+    _, label = connected_components(graph, directed=False)
+    return (label[:n] == label[ground]) | system.blocks.fixed
+
+
+def _package(system, sol, state, load_factor, factor, stable, steps, q_ok, near_limit=False):
+    """Assemble an :class:`Analysis` from the last solve.
+
+    ``near_limit``: the failed solve continued from an equilibrium just below
+    the limit (a strength trial); the blocks that state no longer holds
+    narrow the moving blocks down to the mechanism.
+    """
     asm = system.assembly
     free = ~system.blocks.fixed
     disp = np.zeros((system.blocks.n_blocks, 3))
@@ -135,6 +169,12 @@ def _package(system, sol, state, load_factor, factor, stable, steps, q_ok):
         resp = sol.response
         lam_fail = steps[-1].load_factor if steps else load_factor
         mech, unstable = _mechanism(system, sol, state, lam_fail, factor)
+        if near_limit and sol.reached_q is not None:
+            resp_limit, _ = residual(system, sol.reached_q, state, lam_fail, sol.reached)
+            free = unstable & ~_held(system, resp_limit)
+            if free.any():
+                unstable = free
+                mech[~unstable] = 0.0
         # show the springs failing in the mechanism (not committed: no equilibrium)
         _, ds = system.assembly.relative_displacement(sol.q)
         stage = steps[-1].stage if steps else 0
@@ -315,7 +355,7 @@ def factor_of_safety(
         else:
             F = 0.5 * (lo_an.strength_factor + hi_F)
         stage += 1
-        a, sol = _continue(system, lo_an, F, stage)
+        a, sol = _continue(system, lo_an, F, stage, resolution=width / 4)
         record(F, a)
         if a.stable:
             lo_an = a
@@ -341,7 +381,7 @@ _DEFINITION = (
 )
 
 
-def _continue(system: System, base: Analysis, factor: float, stage: int, q0=None):
+def _continue(system: System, base: Analysis, factor: float, stage: int, q0=None, resolution=None):
     """One strength trial from the converged state of ``base``: (Analysis, Solve)."""
     asm = system.assembly
     free = ~system.blocks.fixed
@@ -350,11 +390,13 @@ def _continue(system: System, base: Analysis, factor: float, stage: int, q0=None
     q0 = q_base if q0 is None else q0
     lam = base.load_factor
     start = base.state.without_slip()
-    sol, state = _settle(system, start, q0, lam, factor, stage, base.strength_factor, total=True)
+    sol, state = _settle(
+        system, start, q0, lam, factor, stage, base.strength_factor, True, resolution
+    )
     ev = _evidence(sol)
     n_failed = int((state.yielded | state.broken).sum())
     step = Step(stage, lam, factor, sol.converged, ev, n_failed)
     steps = (*base.steps, step)
     if sol.converged:
         return _package(system, sol, state, lam, factor, True, steps, sol.q), sol
-    return _package(system, sol, start, lam, factor, False, steps, q_base), sol
+    return _package(system, sol, start, lam, factor, False, steps, q_base, near_limit=True), sol

@@ -66,6 +66,12 @@ class Joint:
         _check(where, "stiffness_ratio", self.stiffness_ratio, lo=0.0, open_lo=True)
         ks_given = self.shear_stiffness is not None
         if not ks_given:
+            if not 1e-2 <= self.stiffness_ratio <= 1e2:
+                raise InputError(
+                    f"{where} stiffness_ratio",
+                    f"kn / ks = {self.stiffness_ratio:.3g} is out of range",
+                    "use kn / ks between 0.01 and 100 (2 to 3 for rock: 2 (1 + nu))",
+                )
             object.__setattr__(
                 self, "shear_stiffness", self.normal_stiffness / self.stiffness_ratio
             )

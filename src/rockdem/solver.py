@@ -21,7 +21,7 @@ is the caller's job (:mod:`rockdem.analysis`).
 from __future__ import annotations
 
 import logging
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 import scipy.sparse as sp
@@ -45,6 +45,17 @@ LINE_SEARCH_HALVINGS = 8
 BLOWUP = 1e6
 #: fresh starts of the strength homotopy: halve the factor up to this many times
 HOMOTOPY_TRIES = 5
+#: fictitious-strength release from scratch: s -> s * ratio, then 0 below RELEASE_LAST
+RELEASE_RATIO = 0.3
+#: a Newton solve has stalled when the residual fell less than x STALL_RATIO
+#: over the last STALL_WINDOW accepted steps
+STALL_WINDOW = 6
+STALL_RATIO = 0.5
+#: Newton iterations tried from scratch before releasing fictitious strength
+DIRECT_FROM_SCRATCH = 20
+#: Newton iterations per step of the strength homotopy (a step that needs more is halved)
+HOMOTOPY_ITERATIONS = 25
+RELEASE_LAST = 1e-3
 #: smallest relative step of the homotopy before equilibrium is declared lost
 HOMOTOPY_MIN_STEP = 1e-4
 
@@ -189,6 +200,8 @@ def _newton(system, state, load_factor, factor, q, max_it):
             history.append(merit)
             if alpha == 1.0:
                 beta = max(beta / 10.0, BETA_START)
+            if len(history) > STALL_WINDOW and merit > STALL_RATIO * history[-1 - STALL_WINDOW]:
+                return Solve(False, q, resp, it, history, "stalled", direction)
         else:
             beta *= 10.0
             if beta > BETA_MAX:
@@ -200,6 +213,54 @@ def _newton(system, state, load_factor, factor, q, max_it):
     return Solve(False, q, resp, max_it, history, "iteration limit", direction)
 
 
+def _release(system, state, load_factor, factor, max_it) -> Solve:
+    """Solve from scratch by releasing fictitious strength.
+
+    At zero displacement every spring sits on the apex of its Coulomb cone
+    (no stress, no strength), the worst place to start Newton.  So add a
+    fictitious cohesion and tensile strength ``s * ref`` (``ref`` the largest
+    elastic spring stress: at ``s = 1`` nothing fails and the elastic solution
+    is exact) and release it, ``s -> 0`` geometrically, each solve starting
+    from the last.  ``reached`` reports the smallest ``s`` that converged.
+    """
+    asm = system.assembly
+    springs = system.springs
+    u = system.lu0.solve(load_factor * system.f_ext)
+    dn, ds = asm.relative_displacement(u)
+    ref = float(max(np.max(np.abs(springs.kn * dn)), np.max(np.abs(springs.ks * ds)), 1e-300))
+    q = np.zeros(asm.n_dof)
+    total, history = 0, []
+    s_ok, ratio = None, RELEASE_RATIO
+    s = 1.0
+    while True:
+        fict = s * ref
+        relaxed = replace(
+            springs,
+            cohesion=springs.cohesion + fict,
+            cohesion_residual=springs.cohesion_residual + fict,
+            tensile=springs.tensile + fict,
+            tensile_residual=springs.tensile_residual + fict,
+        )
+        sol = _newton(replace(system, springs=relaxed), state, load_factor, factor, q, max_it)
+        total += sol.iterations
+        history += sol.residuals
+        if sol.converged:
+            q, s_ok = sol.q, s
+            if s == 0.0:
+                resp, _ = residual(system, q, state, load_factor, factor)
+                return Solve(True, q, resp, total, history, "converged", sol.direction, 0.0)
+            s = s * ratio if s * ratio > RELEASE_LAST else 0.0
+        else:
+            if s_ok is None:
+                return Solve(False, sol.q, sol.response, total, history, "no start", sol.direction)
+            ratio = np.sqrt(ratio)
+            if ratio > 0.9:
+                reason = f"fictitious strength could not be released below {s_ok:.3g}"
+                resp, _ = residual(system, q, state, load_factor, factor)
+                return Solve(False, q, resp, total, history, reason, sol.direction, s_ok)
+            s = s_ok * ratio if s_ok * ratio > RELEASE_LAST else 0.0
+
+
 def solve_equilibrium(
     system: System,
     state: SpringState,
@@ -209,17 +270,23 @@ def solve_equilibrium(
     q0: np.ndarray | None = None,
     base_factor: float | None = None,
     max_iterations: int | None = None,
+    resolution: float | None = None,
 ) -> Solve:
     """Displacements in equilibrium with the loads, from the committed state.
 
-    First a direct Newton solve from ``q0``.  If that fails, a homotopy in
-    the strength factor: from ``q0`` if it is in equilibrium at
-    ``base_factor``, otherwise from a fresh solve at a smaller factor
-    (stronger joints: fewer springs slide, Newton converges), the strength
-    is reduced step by step to the requested factor, each solve starting from
-    the previous one (the step grows x1.5 after a success and is halved after
-    a failure).  No state is committed on the way.  Equilibrium is declared
-    lost only when a step smaller than ``HOMOTOPY_MIN_STEP`` (relative) fails.
+    1. A direct Newton solve from ``q0`` (a short one from scratch).
+    2. From scratch, if that fails: release a fictitious strength
+       (:func:`_release`).
+    3. A homotopy in the strength factor, from ``q0`` if it is in equilibrium
+       at ``base_factor`` (or from a released state at a smaller factor): the
+       strength is reduced step by step to the requested factor, each solve
+       starting from the previous one (the step grows x1.5 after a success and
+       is halved after a failure).  Equilibrium is declared lost only when a
+       step smaller than ``resolution`` (default ``HOMOTOPY_MIN_STEP`` x the
+       factor) fails; the result then reports the largest factor reached and
+       the one that failed.
+
+    No state is committed on the way.
     """
     asm = system.assembly
     max_it = max_iterations or system.model.settings.max_iterations
@@ -228,7 +295,15 @@ def solve_equilibrium(
     if asm.n_dof == 0 or f_norm == 0.0:
         resp, _ = residual(system, q, state, load_factor, strength_factor)
         return Solve(True, q, resp, 0, [0.0], "no load", np.zeros_like(q))
-    sol = _newton(system, state, load_factor, strength_factor, q, max_it)
+    fresh = base_factor is None and not np.any(q)
+    sol = _newton(
+        system,
+        state,
+        load_factor,
+        strength_factor,
+        q,
+        min(max_it, DIRECT_FROM_SCRATCH) if fresh else max_it,
+    )
     if sol.converged:
         return sol
     total, history = sol.iterations, list(sol.residuals)
@@ -236,21 +311,40 @@ def solve_equilibrium(
     if base_factor is not None and q0 is not None:
         F_ok, q_ok = base_factor, q0
     else:
-        F_ok, q_ok = target, None
+        start = _release(system, state, load_factor, target, max_it)
+        total += start.iterations
+        history += start.residuals
+        if start.converged:
+            return Solve(
+                True, start.q, start.response, total, history, "converged", start.direction
+            )
+        if start.reached is None:
+            return Solve(
+                False, start.q, start.response, total, history, start.reason, start.direction
+            )
+        # the strengths could not all be released: try the strength homotopy from
+        # the weakest fully released state we can find
+        F_ok, q_ok = None, None
+        F_try = target
         for _ in range(HOMOTOPY_TRIES):
-            F_ok *= 0.5
-            start = _newton(system, state, load_factor, F_ok, np.zeros(asm.n_dof), max_it)
-            total += start.iterations
-            if start.converged:
-                q_ok = start.q
+            F_try *= 0.5
+            weak = _release(system, state, load_factor, F_try, max_it)
+            total += weak.iterations
+            if weak.converged:
+                F_ok, q_ok = F_try, weak.q
                 break
         if q_ok is None:
-            return Solve(False, sol.q, sol.response, total, history, "no start", sol.direction)
+            return Solve(
+                False, start.q, start.response, total, history, "no start", start.direction
+            )
     step = target - F_ok
+    if F_ok == base_factor:  # the direct attempt already failed at the target
+        step *= 0.5
+    smallest = resolution if resolution is not None else HOMOTOPY_MIN_STEP * abs(target)
     last = sol
     while True:
         F_try = F_ok + step
-        trial = _newton(system, state, load_factor, F_try, q_ok, max_it)
+        trial = _newton(system, state, load_factor, F_try, q_ok, min(max_it, HOMOTOPY_ITERATIONS))
         total += trial.iterations
         history += trial.residuals
         if trial.converged:
@@ -265,7 +359,7 @@ def solve_equilibrium(
         else:
             last = trial
             step = 0.5 * step
-            if abs(step) < HOMOTOPY_MIN_STEP * abs(target):
+            if abs(step) < smallest:
                 reason = f"no equilibrium beyond strength factor {F_ok:.6g} ({last.reason})"
                 return Solve(
                     False,

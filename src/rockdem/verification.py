@@ -235,23 +235,29 @@ def brick_slope(
     n_blocks: int,
     *,
     friction_angle: float = 35.0,
+    bedding_dip: float = 20.0,
     face_angle: float = 70.0,
     kn: float = 1e6,
     settings: Settings | None = None,
 ) -> Model:
-    """A brick-pattern slope (horizontal bedding, staggered cross joints) with
-    about ``n_blocks`` blocks, for benchmarks."""
-    # blocks ~ area / (b * h) with area of the section ~ 2.1 * H^2 (behind = 2H)
+    """A brick-pattern slope with about ``n_blocks`` blocks, for benchmarks.
+
+    Bedding dipping ``bedding_dip`` out of the face, vertical cross joints
+    staggered by half a brick from layer to layer (bricks twice as long as
+    high).  The layers that daylight slide at ``tan(phi) / tan(bedding_dip)``
+    (1.92 by default), so the benchmark is also a check at scale.
+    """
     height = 20.0
-    area = height * (2 * height) + 0.5 * height * height / np.tan(np.radians(face_angle))
+    behind = 2 * height
+    area = height * behind + 0.5 * height * height / np.tan(np.radians(face_angle))
     size = np.sqrt(area / n_blocks / 2.0)
     return bedding_slope(
         height=height,
         face_angle=face_angle,
-        bedding_dip=0.0,
+        bedding_dip=bedding_dip,
         bedding_spacing=size,
         cross_spacing=2 * size,
-        behind=2 * height,
+        behind=behind,
         friction_angle=friction_angle,
         kn=kn,
         stagger=True,
