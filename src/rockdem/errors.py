@@ -6,6 +6,8 @@ Bad input is an *error* (raised); a slope that finds no equilibrium is a
 
 from __future__ import annotations
 
+import math
+
 
 class RockdemError(Exception):
     """Base class of every error rockdem raises on purpose."""
@@ -33,3 +35,33 @@ class InputError(RockdemError, ValueError):
         if fix:
             text += f"; {fix}"
         super().__init__(text)
+
+
+def check_number(
+    where: str,
+    key: str,
+    value,
+    *,
+    lo: float | None = None,
+    hi: float | None = None,
+    open_lo: bool = False,
+) -> float:
+    """``value`` as a finite float within ``[lo, hi)`` (``(lo, hi)`` if ``open_lo``).
+
+    Raises
+    ------
+    InputError
+        Naming ``where key``, the value and the range to use.
+    """
+    try:
+        v = float(value)
+    except (TypeError, ValueError) as exc:
+        raise InputError(f"{where} {key}", f"{value!r} is not a number", "give a number") from exc
+    if not math.isfinite(v):
+        raise InputError(f"{where} {key}", f"{value} is not finite", "give a finite number")
+    if lo is not None and (v < lo or (open_lo and v == lo)):
+        rel = ">" if open_lo else ">="
+        raise InputError(f"{where} {key}", f"{v:g} is out of range", f"give a value {rel} {lo:g}")
+    if hi is not None and v >= hi:
+        raise InputError(f"{where} {key}", f"{v:g} is out of range", f"give a value < {hi:g}")
+    return v

@@ -2,10 +2,9 @@
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
-from .errors import InputError
+from .errors import InputError, check_number
 
 
 @dataclass(frozen=True)
@@ -62,8 +61,8 @@ class Joint:
 
     def __post_init__(self) -> None:
         where = f"joint {self.name!r}"
-        _check(where, "normal_stiffness", self.normal_stiffness, lo=0.0, open_lo=True)
-        _check(where, "stiffness_ratio", self.stiffness_ratio, lo=0.0, open_lo=True)
+        check_number(where, "normal_stiffness", self.normal_stiffness, lo=0.0, open_lo=True)
+        check_number(where, "stiffness_ratio", self.stiffness_ratio, lo=0.0, open_lo=True)
         ks_given = self.shear_stiffness is not None
         if not ks_given:
             if not 1e-2 <= self.stiffness_ratio <= 1e2:
@@ -75,7 +74,7 @@ class Joint:
             object.__setattr__(
                 self, "shear_stiffness", self.normal_stiffness / self.stiffness_ratio
             )
-        _check(where, "shear_stiffness", self.shear_stiffness, lo=0.0, open_lo=True)
+        check_number(where, "shear_stiffness", self.shear_stiffness, lo=0.0, open_lo=True)
         ratio = self.normal_stiffness / self.shear_stiffness
         if not 1e-2 <= ratio <= 1e2:
             key = "shear_stiffness" if ks_given else "stiffness_ratio"
@@ -84,18 +83,20 @@ class Joint:
                 f"kn / ks = {ratio:.3g} is out of range",
                 "use kn / ks between 0.01 and 100 (2 to 3 for rock: 2 (1 + nu))",
             )
-        _check(where, "friction_angle", self.friction_angle, lo=0.0, hi=90.0)
-        _check(where, "cohesion", self.cohesion, lo=0.0)
-        _check(where, "tensile_strength", self.tensile_strength, lo=0.0)
+        check_number(where, "friction_angle", self.friction_angle, lo=0.0, hi=90.0)
+        check_number(where, "cohesion", self.cohesion, lo=0.0)
+        check_number(where, "tensile_strength", self.tensile_strength, lo=0.0)
         if self.residual_cohesion is None:
             object.__setattr__(self, "residual_cohesion", self.cohesion)
         if self.residual_friction_angle is None:
             object.__setattr__(self, "residual_friction_angle", self.friction_angle)
         if self.residual_tensile_strength is None:
             object.__setattr__(self, "residual_tensile_strength", self.tensile_strength)
-        _check(where, "residual_cohesion", self.residual_cohesion, lo=0.0)
-        _check(where, "residual_tensile_strength", self.residual_tensile_strength, lo=0.0)
-        _check(where, "residual_friction_angle", self.residual_friction_angle, lo=0.0, hi=90.0)
+        check_number(where, "residual_cohesion", self.residual_cohesion, lo=0.0)
+        check_number(where, "residual_tensile_strength", self.residual_tensile_strength, lo=0.0)
+        check_number(
+            where, "residual_friction_angle", self.residual_friction_angle, lo=0.0, hi=90.0
+        )
 
     @property
     def ductile(self) -> Joint:
@@ -112,25 +113,3 @@ def _replace(joint: Joint, **changes) -> Joint:
     from dataclasses import replace
 
     return replace(joint, **changes)
-
-
-def _check(
-    where: str,
-    key: str,
-    value,
-    *,
-    lo: float | None = None,
-    hi: float | None = None,
-    open_lo: bool = False,
-) -> None:
-    try:
-        v = float(value)
-    except (TypeError, ValueError) as exc:
-        raise InputError(f"{where} {key}", f"{value!r} is not a number", "give a number") from exc
-    if not math.isfinite(v):
-        raise InputError(f"{where} {key}", f"{value} is not finite", "give a finite number")
-    if lo is not None and (v < lo or (open_lo and v == lo)):
-        rel = ">" if open_lo else ">="
-        raise InputError(f"{where} {key}", f"{v:g} is out of range", f"give a value {rel} {lo:g}")
-    if hi is not None and v >= hi:
-        raise InputError(f"{where} {key}", f"{v:g} is out of range", f"give a value < {hi:g}")

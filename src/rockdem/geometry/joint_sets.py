@@ -35,7 +35,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import InputError
+from ..errors import InputError, check_number
 from ..joints import Joint
 
 __all__ = ["JointSet"]
@@ -107,11 +107,11 @@ class JointSet:
         if not isinstance(self.joint, Joint):
             raise InputError(f"{where} joint", f"{self.joint!r} is not a rockdem.Joint",
                              "give Joint(normal_stiffness=..., friction_angle=...)")
-        dip = _number(where, "dip", self.dip)
+        dip = check_number(where, "dip", self.dip)
         if not 0.0 <= dip < 180.0:
             raise InputError(f"{where} dip", f"{dip:g} is out of range",
                              "give the apparent dip in [0, 180) degrees (> 90 dips into the slope)")
-        spacing = _number(where, "spacing", self.spacing)
+        spacing = check_number(where, "spacing", self.spacing)
         if spacing <= 0:
             raise InputError(f"{where} spacing", f"{spacing:g} is not positive",
                              "give a spacing > 0 (the normal distance between joints)")
@@ -122,23 +122,23 @@ class JointSet:
                              "give (x, y)") from exc
         if not (math.isfinite(ox) and math.isfinite(oy)):
             raise InputError(f"{where} origin", "is not finite", "give finite (x, y)")
-        gap = _number(where, "gap", self.gap)
+        gap = check_number(where, "gap", self.gap)
         if gap < 0:
             raise InputError(f"{where} gap", f"{gap:g} is negative", "give a gap >= 0")
         trace = self.trace_length
         if trace is not None:
-            trace = _number(where, "trace_length", trace)
+            trace = check_number(where, "trace_length", trace)
             if trace <= 0:
                 raise InputError(f"{where} trace_length", f"{trace:g} is not positive",
                                  "give a trace length > 0, or None for persistent joints")
         elif gap > 0:
             raise InputError(f"{where} gap", "is given without a trace_length",
                              "give trace_length (or gap=0 for persistent joints)")
-        stagger = _number(where, "stagger", self.stagger)
+        stagger = check_number(where, "stagger", self.stagger)
         if not 0.0 <= stagger <= 1.0:
             raise InputError(f"{where} stagger", f"{stagger:g} is out of range", "give 0 to 1")
         for key in ("spacing_sd", "dip_sd"):
-            if _number(where, key, getattr(self, key)) < 0:
+            if check_number(where, key, getattr(self, key)) < 0:
                 raise InputError(f"{where} {key}", "is negative", "give a value >= 0")
         object.__setattr__(self, "dip", dip)
         object.__setattr__(self, "spacing", spacing)
@@ -295,11 +295,3 @@ class JointSet:
         return s, i
 
 
-def _number(where: str, key: str, value) -> float:
-    try:
-        v = float(value)
-    except (TypeError, ValueError) as exc:
-        raise InputError(f"{where} {key}", f"{value!r} is not a number", "give a number") from exc
-    if not math.isfinite(v):
-        raise InputError(f"{where} {key}", f"{value} is not finite", "give a finite number")
-    return v
