@@ -1,0 +1,276 @@
+"""The sections that describe the slope: materials, joints, blocks, joint lines, a
+generated slope, removal, loads and supports."""
+
+# pydantic copies mutable defaults; ruff cannot see that _Section is a BaseModel
+# ruff: noqa: RUF012
+
+from __future__ import annotations
+
+from typing import Annotated, Literal
+
+from pydantic import Field, model_validator
+
+from .values import (
+    _AS_NUMBER,
+    Angle,
+    Dip,
+    Fraction,
+    Integer,
+    NonNegative,
+    Number,
+    Point,
+    Polygon,
+    Positive,
+    _Section,
+)
+
+
+class MaterialSpec(_Section):
+    """A rock material (referred to by name from blocks and slopes)."""
+
+    unit_weight: NonNegative
+    """Weight per unit volume x the section's thickness (for example 26 kN/m^3 for a
+    1 m slice); weight = unit_weight x block area."""
+    description: str = ""
+    """Free text."""
+
+
+class JointSpec(_Section):
+    """Strength and stiffness of one kind of interface (joint set, rock bridge, ground)."""
+
+    normal_stiffness: Positive
+    """kn: normal stiffness per unit length per unit closure (for example kN/m^2/m).
+    Choose it large against the loads; its value hardly changes collapse results."""
+    friction_angle: Angle
+    """Peak friction angle in degrees, 0 <= phi < 90."""
+    cohesion: NonNegative = 0.0
+    """Peak cohesion (stress), >= 0."""
+    tensile_strength: NonNegative = 0.0
+    """Tension cut-off (stress), >= 0; 0 means an open joint that carries no tension."""
+    shear_stiffness: Positive | None = None
+    """ks; default normal_stiffness / stiffness_ratio."""
+    stiffness_ratio: Positive = 2.5
+    """kn / ks used when shear_stiffness is not given (2 to 3 for rock)."""
+    residual_cohesion: NonNegative | None = 0.0
+    """Cohesion after a point has yielded; default 0 (brittle). null keeps the peak
+    cohesion (ductile)."""
+    residual_friction_angle: Angle | None = None
+    """Friction angle after yield; default (null) the peak friction angle."""
+    residual_tensile_strength: NonNegative | None = 0.0
+    """Tensile strength after a point has yielded in shear; default 0. null keeps
+    tensile_strength (ductile). A point broken in tension never carries tension again."""
+    description: str = ""
+    """Free text."""
+
+
+class BlockSpec(_Section):
+    """One rigid block given by its outline."""
+
+    vertices: Polygon
+    """Outline `[[x, y], ...]`, at least 3 vertices, in order around the block."""
+    fixed: bool = False
+    """True for immobile ground (no unit weight needed)."""
+    material: str | None = None
+    """Name of a material in `materials` (gives the unit weight)."""
+    unit_weight: NonNegative | None = None
+    """Unit weight of this block (instead of `material`)."""
+    id: Integer | None = None
+    """Label reported in results; default the block's position in the list (0, 1, ...)."""
+
+
+class JointLineSpec(_Section):
+    """A joint trace: interfaces lying on it take its joint properties.
+
+    Give either `start` and `end`, or `point` and `dip` (a line through the
+    point, extended across the whole model).
+    """
+
+    joint: str
+    """Name of a joint in `joints`."""
+    start: Point | None = None
+    """First end of the segment."""
+    end: Point | None = None
+    """Second end of the segment."""
+    point: Point | None = None
+    """A point the (infinite) line passes through."""
+    dip: Dip | None = None
+    """Dip of the line in degrees, 0 <= dip < 180, measured down from +x toward the
+    face (the line runs along (cos dip, -sin dip)); dip < 90 dips out of the face."""
+
+    @model_validator(mode="after")
+    def _one_form(self) -> JointLineSpec:
+        segment = self.start is not None or self.end is not None
+        line = self.point is not None or self.dip is not None
+        if segment and line:
+            raise ValueError("give either start and end, or point and dip, not both")
+        if segment and (self.start is None or self.end is None):
+            raise ValueError("a segment needs both start and end")
+        if line and (self.point is None or self.dip is None):
+            raise ValueError("a line needs both point and dip")
+        if not segment and not line:
+            raise ValueError("give start and end, or point and dip")
+        return self
+
+
+class ProfileSpec(_Section):
+    """The ground surface of the section: explicit points, or a simple slope.
+
+    Give either `points`, or `height` and `face_angle` (with the optional keys
+    of a simple slope).  The slope faces +x: crest on the left, toe on the right.
+    """
+
+    points: list[Point] | None = Field(default=None, min_length=2)
+    """Surface points `[[x, y], ...]` from left (crest side) to right (toe side)."""
+    height: Positive | None = None
+    """Simple slope: height from toe to crest."""
+    face_angle: Annotated[float, Field(gt=0.0, le=90.0, allow_inf_nan=False), _AS_NUMBER] | None = (
+        None
+    )
+    """Simple slope: inclination of the face in degrees (0 < angle <= 90)."""
+    crest_length: Positive | None = None
+    """Simple slope: length of the flat ground behind the crest (default: the height)."""
+    toe_length: Positive | None = None
+    """Simple slope: length of the flat ground in front of the toe (default: half the
+    height)."""
+    bench_width: NonNegative = 0.0
+    """Simple slope: width of benches (0: no benches)."""
+    bench_height: Positive | None = None
+    """Simple slope: vertical distance between benches, counted up from the toe
+    (needed when bench_width > 0)."""
+    toe: Point = (0.0, 0.0)
+    """Simple slope: position of the toe."""
+
+    @model_validator(mode="after")
+    def _one_form(self) -> ProfileSpec:
+        simple = self.height is not None or self.face_angle is not None
+        if self.points is not None and simple:
+            raise ValueError("give either points, or height and face_angle, not both")
+        if self.points is None and not (self.height is not None and self.face_angle is not None):
+            raise ValueError("give points, or both height and face_angle")
+        return self
+
+
+class JointSetSpec(_Section):
+    """A set of parallel joints cutting the slope into blocks."""
+
+    dip: Dip
+    """Dip in degrees, 0 <= dip < 180 (trace along (cos dip, -sin dip); dip < 90 dips
+    out of the face)."""
+    spacing: Positive
+    """Mean distance between joints, measured normal to them."""
+    joint: str | None = None
+    """Name of the joint properties in `joints`; default the set's own name."""
+    origin: Point = (0.0, 0.0)
+    """A point one joint of the set passes through."""
+    trace_length: Positive | None = None
+    """Length of each joint trace (null: persistent joints across the slope)."""
+    gap: NonNegative = 0.0
+    """Length of the rock bridges between traces of non-persistent joints (needs
+    `slope.bridge_joint`)."""
+    stagger: Annotated[float, Field(ge=0.0, le=1.0, allow_inf_nan=False), _AS_NUMBER] = 0.0
+    """Shift of the trace pattern from one joint to the next, as a fraction of
+    trace_length + gap."""
+    spacing_sd: NonNegative = 0.0
+    """Standard deviation of the spacing (0: regular)."""
+    dip_sd: NonNegative = 0.0
+    """Standard deviation of the dip in degrees (0: all parallel)."""
+    seed: Integer | None = None
+    """Random seed of this set (default: from `slope.seed`)."""
+
+
+class SlopeSpec(_Section):
+    """A slope generated from a profile cut by joint sets (instead of `blocks`)."""
+
+    profile: ProfileSpec
+    """The ground surface."""
+    joint_sets: dict[str, JointSetSpec] = Field(min_length=1)
+    """Joint sets by name (at least one)."""
+    material: str | None = None
+    """Material of the rock mass (default: the only one in `materials`)."""
+    unit_weight: NonNegative | None = None
+    """Unit weight of the rock mass (instead of `material`)."""
+    depth: Positive
+    """Depth of the modelled rock below the lowest profile point."""
+    behind: NonNegative = 0.0
+    """Horizontal ground added behind (left of) the profile's first point."""
+    boundary: list[Literal["base", "back", "front"]] = ["base", "back", "front"]
+    """Sides of the section backed by a fixed strip of ground ([] for none)."""
+    ground_thickness: Positive | None = None
+    """Thickness of the fixed strips (default 10% of the larger section size)."""
+    bridge_joint: str | None = None
+    """Joint (name in `joints`) for the rock bridges between non-persistent joints."""
+    fixed_region: Polygon | None = None
+    """Region of the section that is fixed ground (besides the `boundary` strips)."""
+    min_block_fraction: Fraction = 0.05
+    """Blocks smaller than this fraction of the median block area are slivers."""
+    slivers: Literal["merge", "report"] = "merge"
+    """Merge each sliver into the neighbour sharing its longest edge, or keep it and
+    only report it."""
+    seed: Integer = 0
+    """Random seed of the joint generation (reproducible models)."""
+
+
+class RemoveSpec(_Section):
+    """Blocks taken out of the model before the analysis (excavation)."""
+
+    blocks: list[Integer] = []
+    """Ids of blocks to remove."""
+    regions: list[Polygon] = []
+    """Polygons to excavate.  Generated slopes are cut along the polygon; with
+    explicit blocks, every block whose centroid lies inside is removed."""
+    profile: list[Point] | None = Field(default=None, min_length=2)
+    """Generated slopes only: cut the slope down to this new ground profile
+    `[[x, y], ...]` (left to right; everything above it is excavated)."""
+
+
+class PointLoadSpec(_Section):
+    """A force at a point on a block boundary (it acts on the block it pushes into)."""
+
+    at: Point
+    """Point of application `[x, y]`."""
+    force: Point
+    """Force `[fx, fy]` (y up: a downward load has fy < 0)."""
+    name: str = ""
+    """Label reported with results."""
+
+
+class LineLoadSpec(_Section):
+    """A uniform traction along a segment of the block boundaries (a foundation)."""
+
+    start: Point
+    """First end of the loaded segment."""
+    end: Point
+    """Second end of the loaded segment."""
+    q: Point
+    """Traction `[qx, qy]`, force per unit length (y up)."""
+    name: str = ""
+    """Label reported with results."""
+
+
+class LoadsSpec(_Section):
+    """External loads besides the self-weight."""
+
+    gravity: bool = True
+    """Apply the self-weight of the blocks."""
+    seismic_h: Annotated[float, Field(gt=-1.0, lt=1.0, allow_inf_nan=False), _AS_NUMBER] = 0.0
+    """Pseudo-static horizontal coefficient kh: a force kh x W toward +x (out of the face)."""
+    seismic_v: Annotated[float, Field(gt=-1.0, lt=1.0, allow_inf_nan=False), _AS_NUMBER] = 0.0
+    """Pseudo-static vertical coefficient kv: a force kv x W downward."""
+    points: list[PointLoadSpec] = []
+    """Point loads."""
+    lines: list[LineLoadSpec] = []
+    """Line loads."""
+
+
+class SupportSpec(_Section):
+    """A bolt or anchor: a force of given magnitude and direction at a point."""
+
+    at: Point
+    """Point of application on the face `[x, y]`."""
+    force: Positive
+    """Magnitude of the support force."""
+    angle: Number
+    """Direction in degrees counter-clockwise from +x (for example 165 pulls into a
+    face looking toward +x, 15 degrees below horizontal)."""
+    name: str = ""
+    """Label reported with results."""

@@ -1,0 +1,113 @@
+"""The sections that say how to analyse the slope: solver settings, strength
+reduction and the stabilisation design."""
+
+# pydantic copies mutable defaults; ruff cannot see that _Section is a BaseModel
+# ruff: noqa: RUF012
+
+from __future__ import annotations
+
+from typing import Annotated, Literal
+
+from pydantic import Field, model_validator
+
+from .sections import RemoveSpec
+from .values import _AS_INTEGER, _AS_NUMBER, Number, Point, Positive, _Section
+
+
+class StrengthReductionSpec(_Section):
+    """Settings of the factor of safety by strength reduction (`rockdem fos`)."""
+
+    width: Positive = 0.005
+    """Stop when the bracket [stable, unstable] is narrower than this."""
+    start: Positive = 1.0
+    """First trial factor."""
+    grow: Annotated[float, Field(gt=1.0, allow_inf_nan=False), _AS_NUMBER] = 1.5
+    """Factor between trials while no failure has been found."""
+    smallest: Positive = 0.05
+    """Give up (strength-independent mechanism) below this factor."""
+    largest: Positive = 100.0
+    """Give up (no failure) above this factor."""
+
+    @model_validator(mode="after")
+    def _order(self) -> StrengthReductionSpec:
+        if not self.smallest < self.start < self.largest:
+            raise ValueError("needs smallest < start < largest")
+        return self
+
+
+class AnalysisSpec(_Section):
+    """How the equations are integrated and solved."""
+
+    quadrature: Literal["lobatto", "gauss"] = "lobatto"
+    """Spring point rule along each interface: lobatto (includes the ends, exact
+    pivoting) or gauss (2 points = the seed paper's lumped springs)."""
+    points_per_interface: Annotated[int, Field(ge=2, le=5), _AS_INTEGER] = 3
+    """Spring points per interface (3 with lobatto is Simpson's rule)."""
+    load_steps: Annotated[int, Field(ge=1), _AS_INTEGER] = 5
+    """Increments in which the loads are applied (staged gravity)."""
+    tolerance: Annotated[float, Field(gt=0.0, lt=1e-2, allow_inf_nan=False), _AS_NUMBER] = 1e-8
+    """Equilibrium when the out-of-balance force is below tolerance x the external force."""
+    max_iterations: Annotated[int, Field(ge=1), _AS_INTEGER] = 100
+    """Newton iterations per solve before a step is declared failed."""
+    reduce_tensile: bool = True
+    """Divide the tensile strength by the trial factor in strength reduction too."""
+    strength_reduction: StrengthReductionSpec = StrengthReductionSpec()
+    """Factor of safety search."""
+
+
+class TrialSpec(_Section):
+    """A stabilisation design to try: a removal from the model as it is."""
+
+    name: str
+    """Label of the trial in the report."""
+    remove: RemoveSpec
+    """What this design removes (blocks, regions and/or a new profile), counted from the
+    model as it is (after the top-level `remove`)."""
+    stabilise: bool = False
+    """Then remove mechanism blocks until the target factor of safety is reached (as
+    `rockdem stabilise` does), to see how much more removal the design needs."""
+
+
+class SupportSearchSpec(_Section):
+    """Where a support force is tried (the force itself is found by search)."""
+
+    at: Point | None = None
+    """Point of application on the face `[x, y]` (default: the free surface of the
+    critical mechanism, nearest its centroid)."""
+    angle: Number = 195.0
+    """Direction of the force on the rock in degrees counter-clockwise from +x (195:
+    into the slope, 15 degrees below horizontal, as a down-dipping anchor pulls)."""
+    largest: Positive | None = None
+    """Give up above this force (default: twice the weight of the free rock)."""
+
+
+class StageSpec(_Section):
+    """One excavation stage (bench): what it removes."""
+
+    name: str
+    """Label of the stage in the report."""
+    remove: RemoveSpec
+    """What this stage removes (blocks, regions and/or a new profile)."""
+
+
+class StabilisationSpec(_Section):
+    """Settings of `rockdem stabilise`: target, designs to compare, excavation stages."""
+
+    target_fos: Positive = 1.3
+    """Factor of safety the stabilisation must reach."""
+    max_rounds: Annotated[int, Field(ge=1), _AS_INTEGER] = 6
+    """Block-removal rounds before giving up."""
+    max_removal: Annotated[float, Field(gt=0.0, le=1.0, allow_inf_nan=False), _AS_NUMBER] = 0.3
+    """Largest share of the free rock (by area) that block removal may take."""
+    smallest_set: bool = True
+    """Look for a smaller set among the mechanism blocks (from the top down) when
+    removing all of them reaches the target."""
+    berm: list[Point] | None = Field(default=None, min_length=2)
+    """A berm design: the new ground profile `[[x, y], ...]` (left to right), compared
+    with the other measures."""
+    support: SupportSearchSpec | None = None
+    """Where to try a support force (null: on the critical mechanism, angle 195)."""
+    trials: list[TrialSpec] = []
+    """Removal designs to rate side by side (each from the model as it is)."""
+    stages: list[StageSpec] = []
+    """Excavation stages, analysed in order carrying the joint state forward."""

@@ -1,0 +1,248 @@
+"""Validation of parsed data: pydantic errors as one-line messages naming the key, and
+the cross-references between sections."""
+
+from __future__ import annotations
+
+import difflib
+import types
+import typing
+from typing import Annotated, Any
+
+from pydantic import BaseModel, ValidationError
+
+from .errors import Loc, ModelFileError, _keypath, _kind, _line
+from .spec import ModelFile
+
+
+def validate_document(data: dict, *, source: str = "<string>", nodes: Any = None) -> ModelFile:
+    """Validate parsed data against the file format and its cross-references.
+
+    Raises
+    ------
+    ModelFileError
+        For the first problem found (with the number of further problems).
+    """
+    try:
+        cfg = ModelFile.model_validate(data)
+    except ValidationError as exc:
+        raise _from_validation(exc, source, nodes) from None
+    _check_references(cfg, source, nodes)
+    return cfg
+
+
+def _unwrap(tp: Any) -> Any:
+    """Strip Annotated and Optional from a type annotation."""
+    while True:
+        origin = typing.get_origin(tp)
+        if origin is Annotated:
+            tp = typing.get_args(tp)[0]
+        elif origin in (typing.Union, types.UnionType):
+            args = [a for a in typing.get_args(tp) if a is not type(None)]
+            if len(args) != 1:
+                return tp
+            tp = args[0]
+        else:
+            return tp
+
+
+def _type_at(loc: Loc) -> Any:
+    """The annotation of the value at ``loc`` in :class:`ModelFile` (None if unknown)."""
+    tp: Any = ModelFile
+    for part in loc:
+        tp = _unwrap(tp)
+        if isinstance(tp, type) and issubclass(tp, BaseModel):
+            field = tp.model_fields.get(str(part))
+            if field is None:
+                return None
+            tp = field.annotation
+        elif typing.get_origin(tp) is dict:
+            tp = typing.get_args(tp)[1]
+        elif typing.get_origin(tp) in (list, tuple):
+            tp = typing.get_args(tp)[0]
+        else:
+            return None
+    return _unwrap(tp)
+
+
+def _field_doc(loc: Loc) -> str:
+    parent = _type_at(loc[:-1])
+    if isinstance(parent, type) and issubclass(parent, BaseModel):
+        field = parent.model_fields.get(str(loc[-1]))
+        if field is not None and field.description:
+            return field.description.split(".")[0].replace("\n", " ")
+    return ""
+
+
+def _describe(err: dict) -> tuple[Loc, str, str]:
+    """(loc, problem, fix) for one pydantic error."""
+    loc: Loc = tuple(p for p in err["loc"] if not _is_internal(p))
+    kind = err["type"]
+    value = err.get("input")
+    ctx = err.get("ctx") or {}
+    shown = repr(value) if isinstance(value, str) else _short(value)
+    if kind == "extra_forbidden":
+        parent = _type_at(loc[:-1])
+        allowed = list(parent.model_fields) if isinstance(parent, type) else []
+        close = difflib.get_close_matches(str(loc[-1]), allowed, n=1, cutoff=0.6)
+        fix = f"did you mean `{close[0]}`?" if close else f"allowed keys: {', '.join(allowed)}"
+        return loc, "unknown key", fix
+    if kind == "missing":
+        doc = _field_doc(loc)
+        fix = f"add `{loc[-1]}:`" + (f" ({doc})" if doc else "")
+        return loc, "required key is missing", fix
+    if kind in ("greater_than", "greater_than_equal", "less_than", "less_than_equal"):
+        op = {
+            "greater_than": ">",
+            "greater_than_equal": ">=",
+            "less_than": "<",
+            "less_than_equal": "<=",
+        }[kind]
+        bound = next(iter(ctx.values()))
+        return loc, f"{shown} is out of range", f"give a value {op} {bound:g}"
+    if kind == "number_with_unit":
+        fix = "write the bare number in the units stated in `units` (angles in degrees)"
+        return loc, err["msg"], fix
+    if kind == "geometry":
+        fix = "use `blocks:` (explicit polygons) or `slope:` (a profile cut by joint sets)"
+        return loc, err["msg"], fix
+    if kind in ("number_type", "float_type", "float_parsing"):
+        msg = err["msg"] if kind == "number_type" else f"expected a number, got {shown}"
+        return loc, msg, "write a plain number, for example 30 or 1.0e+6"
+    if kind == "finite_number":
+        return loc, f"{shown} is not a finite number", "give a finite number"
+    if kind in ("int_type", "int_parsing", "int_from_float"):
+        return loc, f"expected a whole number, got {shown}", "write an integer such as 3"
+    if kind in ("bool_type", "bool_parsing"):
+        return loc, f"expected true or false, got {shown}", "write true or false"
+    if kind in ("string_type", "string_parsing"):
+        return loc, f"expected text, got {shown}", "write a name in quotes"
+    if kind == "literal_error":
+        return loc, f"{shown} is not allowed", f"use {ctx.get('expected', '')}"
+    if kind in ("dict_type", "model_type", "model_attributes_type"):
+        fix = "write `key: value` lines indented under it"
+        return loc, f"expected a mapping of keys, got a {_kind(value)}", fix
+    if kind in ("list_type", "tuple_type"):
+        if _is_point(loc):
+            return loc, f"expected a point [x, y], got a {_kind(value)}", "write [x, y]"
+        return loc, f"expected a list, got a {_kind(value)}", "write [a, b, ...] or `- ` items"
+    if kind in ("too_short", "too_long"):
+        if _is_point(loc):
+            return loc, f"expected a point [x, y], got {_short(value)}", "write [x, y]"
+        n = ctx.get("min_length") if kind == "too_short" else ctx.get("max_length")
+        word = "at least" if kind == "too_short" else "at most"
+        return loc, f"has {ctx.get('actual_length')} items", f"give {word} {n}"
+    if kind in ("value_error", "assertion_error"):
+        msg = err["msg"].removeprefix("Value error, ")
+        return loc, msg, "see `rockdem check --help` and docs/file-format.md"
+    return loc, err["msg"], "see docs/file-format.md"
+
+
+def _is_internal(part: Any) -> bool:
+    return isinstance(part, str) and ("[" in part or part.startswith("function-"))
+
+
+def _is_point(loc: Loc) -> bool:
+    tp = _type_at(loc)
+    return typing.get_origin(tp) is tuple
+
+
+def _short(value: Any) -> str:
+    text = repr(value)
+    if isinstance(value, bool) or value is None:
+        text = {True: "true", False: "false", None: "null"}[value]
+    return text if len(text) <= 40 else text[:37] + "..."
+
+
+def _from_validation(exc: ValidationError, source: str, nodes: Any) -> ModelFileError:
+    errors = exc.errors(include_url=False)
+    # report the most specific error first (deepest key path)
+    errors.sort(key=lambda e: -len(e["loc"]))
+    err = errors[0]
+    loc, problem, fix = _describe(err)
+    if len(errors) > 1:
+        fix += f" ({len(errors) - 1} more problem{'s' if len(errors) > 2 else ''} in the file)"
+    return ModelFileError(source, _keypath(loc) or "(top level)", problem, fix, _line(nodes, loc))
+
+
+# ======================================================== cross-checks
+def _check_references(cfg: ModelFile, source: str, nodes: Any) -> None:
+    """Names that refer to other entries must exist."""
+
+    def fail(loc: Loc, problem: str, fix: str) -> None:
+        raise ModelFileError(source, _keypath(loc), problem, fix, _line(nodes, loc))
+
+    joints, materials = list(cfg.joints), list(cfg.materials)
+
+    def joint(loc: Loc, name: str | None) -> None:
+        if name is not None and name not in cfg.joints:
+            close = difflib.get_close_matches(name, joints, n=1)
+            hint = f"did you mean {close[0]!r}?" if close else f"use one of {joints}"
+            fail(loc, f"joint {name!r} is not defined in `joints`", hint)
+
+    def material(loc: Loc, name: str | None) -> None:
+        if name is not None and name not in cfg.materials:
+            hint = f"use one of {materials}" if materials else "define it under `materials`"
+            fail(loc, f"material {name!r} is not defined in `materials`", hint)
+
+    joint(("default_joint",), cfg.default_joint)
+    joint(("ground_joint",), cfg.ground_joint)
+    for i, line in enumerate(cfg.joint_lines):
+        joint(("joint_lines", i, "joint"), line.joint)
+    if cfg.blocks is not None:
+        ids = set()
+        for i, b in enumerate(cfg.blocks):
+            material((("blocks", i, "material")), b.material)
+            if b.material is not None and b.unit_weight is not None:
+                fail(("blocks", i), "has both `material` and `unit_weight`", "give only one")
+            if (
+                not b.fixed
+                and b.material is None
+                and b.unit_weight is None
+                and len(cfg.materials) != 1
+            ):
+                fail(
+                    ("blocks", i),
+                    "free block without a unit weight",
+                    "give `material:` or `unit_weight:` (or define exactly one material)",
+                )
+            bid = i if b.id is None else b.id
+            if bid in ids:
+                fail(("blocks", i, "id"), f"id {bid} is used twice", "give every block its own id")
+            ids.add(bid)
+        if all(b.fixed for b in cfg.blocks):
+            fail(("blocks",), "every block is fixed", "set `fixed: false` on the blocks that move")
+        if cfg.remove.profile is not None:
+            fail(
+                ("remove", "profile"),
+                "is for generated slopes",
+                "use `remove.regions` or `remove.blocks` with explicit blocks",
+            )
+        for k, bid in enumerate(cfg.remove.blocks):
+            if bid not in ids:
+                fail(("remove", "blocks", k), f"no block has id {bid}", "use an id of `blocks`")
+    if cfg.slope is not None:
+        s = cfg.slope
+        material(("slope", "material"), s.material)
+        if s.material is not None and s.unit_weight is not None:
+            fail(("slope",), "has both `material` and `unit_weight`", "give only one")
+        if s.material is None and s.unit_weight is None and len(cfg.materials) != 1:
+            fail(
+                ("slope",),
+                "no unit weight for the rock mass",
+                "give `material:` or `unit_weight:` (or define exactly one material)",
+            )
+        joint(("slope", "bridge_joint"), s.bridge_joint)
+        for name, js in s.joint_sets.items():
+            key = js.joint or name
+            if key not in cfg.joints:
+                loc: Loc = ("slope", "joint_sets", name) + (("joint",) if js.joint else ())
+                fix = "add it under `joints` or set `joint:` to a defined joint"
+                fail(loc, f"joint {key!r} is not defined in `joints`", fix)
+        if cfg.joint_lines:
+            fail(("joint_lines",), "is for explicit blocks", "use `slope.joint_sets` instead")
+        if cfg.default_joint is not None:
+            fail(
+                ("default_joint",),
+                "is for explicit blocks",
+                "generated slopes take each set's joint (and `slope.bridge_joint`)",
+            )
