@@ -1,0 +1,107 @@
+"""The ``rockdem`` command line: check, run, factor of safety, report and plots.
+
+One function per subcommand; each only parses its options, calls the public
+API (:func:`rockdem.config.load_model`, :func:`rockdem.analyse`,
+:func:`rockdem.factor_of_safety`, :func:`rockdem.report.write_report`,
+:func:`rockdem.plots.plot_figure`) and writes.
+
+The commands are grouped in modules: :mod:`~rockdem.cli.checks`,
+:mod:`~rockdem.cli.analyses` (run, fos), :mod:`~rockdem.cli.figures` (report,
+plot) and :mod:`~rockdem.cli.model_files` (schema, example); what they share is
+in :mod:`~rockdem.cli.common` and :mod:`~rockdem.cli.files`.  ``stabilise``
+lives in :mod:`rockdem.cli_stabilise`.  All are registered on :data:`app` here.
+
+Exit codes
+----------
+0
+    Done; this includes a slope found *unstable* (an unstable verdict is a
+    valid result: read it from the output, or from ``"stable"`` with ``--json``).
+1
+    The computation itself failed (an unexpected error inside the analysis).
+2
+    Bad input: a broken model file, an unknown key, a value out of range, a
+    geometry that makes no blocks, bad options, or result files that exist
+    already (without ``--overwrite``), an unknown figure or file type.  One
+    line on stderr names the file, the key path and the fix; ``--debug``
+    shows the traceback instead.
+"""
+
+from __future__ import annotations
+
+from .analyses import _print_fos as _print_fos
+from .analyses import _print_run as _print_run
+from .analyses import _write as _write
+from .analyses import fos as fos
+from .analyses import run as run
+from .checks import _check_summary as _check_summary
+from .checks import _print_check as _print_check
+from .checks import check as check
+from .common import EXIT_FAILED as EXIT_FAILED
+from .common import EXIT_INPUT as EXIT_INPUT
+from .common import EXIT_OK as EXIT_OK
+from .common import DebugOpt as DebugOpt
+from .common import ExampleOpt as ExampleOpt
+from .common import JointOpt as JointOpt
+from .common import JsonOpt as JsonOpt
+from .common import ModelArg as ModelArg
+from .common import OutOpt as OutOpt
+from .common import OverwriteOpt as OverwriteOpt
+from .common import QuietOpt as QuietOpt
+from .common import _echo_json as _echo_json
+from .common import _fos_options as _fos_options
+from .common import _guard as _guard
+from .common import _header as _header
+from .common import _ids as _ids
+from .common import _load as _load
+from .common import _model_path as _model_path
+from .common import _plural as _plural
+from .common import _progress as _progress
+from .common import _root as _root
+from .common import _step_hook as _step_hook
+from .common import _trial_hook as _trial_hook
+from .common import _version as _version
+from .common import app as app
+from .common import err as err
+from .common import example_app as example_app
+from .common import out as out
+from .figures import PLOT_FORMATS as PLOT_FORMATS
+from .figures import PLOT_WHAT as PLOT_WHAT
+from .figures import REPORT_FILE as REPORT_FILE
+from .figures import _joints as _joints
+from .figures import _plot_options as _plot_options
+from .figures import _plot_units as _plot_units
+from .figures import _save_report as _save_report
+from .figures import plot as plot
+from .figures import report as report
+from .files import _check_new_file as _check_new_file
+from .files import _replace as _replace
+from .files import _save_file as _save_file
+from .files import _umask as _umask
+from .model_files import example_copy as example_copy
+from .model_files import example_list as example_list
+from .model_files import schema as schema
+
+# ---------------------------------------------------------------- commands
+# registered here, in the order `rockdem --help` lists them
+app.command()(check)
+app.command()(run)
+app.command()(fos)
+app.command()(report)
+app.command()(plot)
+app.command()(schema)
+example_app.command("list")(example_list)
+example_app.command("copy")(example_copy)
+
+# --------------------------------------------------------------- stabilise
+try:  # written separately; registered when its module is present
+    from ..cli_stabilise import stabilise as _stabilise
+except ModuleNotFoundError as exc:  # only the module itself may be missing
+    if exc.name != f"{__package__.rpartition('.')[0]}.cli_stabilise":
+        raise
+else:
+    app.command("stabilise")(_stabilise)
+
+
+def main() -> None:
+    """Console script entry point (``rockdem``, ``python -m rockdem``)."""
+    app(prog_name="rockdem")

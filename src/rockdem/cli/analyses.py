@@ -1,0 +1,183 @@
+"""``rockdem run`` and ``rockdem fos``: the staged analysis and the factor of safety,
+printed, as JSON, or as result files."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+from rich.markup import escape
+from rich.table import Table
+
+from .common import (
+    DebugOpt,
+    ExampleOpt,
+    JsonOpt,
+    ModelArg,
+    OutOpt,
+    OverwriteOpt,
+    QuietOpt,
+    _echo_json,
+    _fos_options,
+    _guard,
+    _header,
+    _ids,
+    _load,
+    _plural,
+    _progress,
+    err,
+    out,
+)
+
+
+def run(
+    model: ModelArg = None,
+    example: ExampleOpt = None,
+    out_dir: OutOpt = None,
+    overwrite: OverwriteOpt = False,
+    json_: JsonOpt = False,
+    quiet: QuietOpt = False,
+    debug: DebugOpt = False,
+) -> None:
+    """Staged gravity analysis: the verdict, the failed joints and the unstable blocks.
+
+    An unstable slope is a result, not an error: the exit code is 0.
+    """
+    with _guard(debug):
+        from ..analysis import analyse
+        from ..output import analysis_summary, check_output_dir
+
+        # the progress hooks are looked up on the package at call time, so that
+        # rockdem.cli._step_hook and rockdem.cli._trial_hook stay patchable
+        from . import _step_hook
+
+        path, m, cfg = _load(model, example)
+        if out_dir is not None:
+            check_output_dir(out_dir, overwrite=overwrite)
+        with _progress(quiet, "load steps") as bar:
+            task = bar.add_task("load steps", total=m.settings.load_steps)
+            result = analyse(m, progress=_step_hook(bar, task))
+        summary = analysis_summary(result)
+        doc = {**_header(path, m, cfg), "command": "run", **summary}
+        if out_dir is not None:
+            echo = {"model": cfg.model_dump(mode="json")}
+            _write(out_dir, result, {**doc, **echo}, overwrite, quiet or json_)
+        if json_:
+            _echo_json(doc)
+            return
+        _print_run(doc, result)
+
+
+def _write(folder: Path, analysis, document: dict[str, Any], overwrite: bool, quiet: bool):
+    from ..output import analysis_tables, write_results
+
+    files = write_results(folder, analysis_tables(analysis), document, overwrite=overwrite)
+    if not quiet:
+        err.print(f"results written to {escape(str(folder))}/ ({', '.join(f.name for f in files)})")
+
+
+def _print_run(doc: dict[str, Any], result) -> None:
+    out.print(f"[bold]{escape(doc['model_name'])}[/bold]  ({escape(doc['model_file'])})")
+    n = len(result.steps)
+    if doc["stable"]:
+        out.print(
+            f"verdict: [bold green]STABLE[/bold green] under the full load "
+            f"({_plural(n, 'load step')})"
+        )
+    else:
+        out.print(
+            f"verdict: [bold red]UNSTABLE[/bold red]: no equilibrium at load step {n} "
+            f"(last equilibrium at load factor {doc['load_factor']:.3g}); "
+            f"{escape(doc['evidence'])}"
+        )
+    blocks = doc["unstable_blocks"]
+    out.print(f"unstable blocks ({len(blocks)}): " + (_ids(blocks) if blocks else "none"))
+    failed = doc["failed_interfaces"]
+    out.print(f"failed joints ({len(failed)})" + (":" if failed else ": none"))
+    if failed:
+        table = Table(
+            "interface", "blocks", "kind", "state", "failed", "first step", box=None, pad_edge=False
+        )
+        for row in failed[:30]:
+            table.add_row(
+                str(row["interface"]),
+                f"{row['block_a']}-{row['block_b']}",
+                escape(row["kind"]),
+                row["state"],
+                f"{100 * row['failed_fraction']:.0f}%",
+                str(row["first_failure"]),
+            )
+        out.print(table)
+        if len(failed) > 30:
+            out.print(f"... and {len(failed) - 30} more (see interfaces.csv with --out)")
+    if not doc["stable"] and doc["slip_surface"]:
+        r = result.interfaces
+        parts = [
+            f"{i} ({escape(str(r.kind[i]))}, blocks {r.block_a[i]}-{r.block_b[i]})"
+            for i in doc["slip_surface"][:20]
+        ]
+        more = len(doc["slip_surface"]) - len(parts)
+        out.print("slip surface: " + ", ".join(parts) + (f", ... ({more} more)" if more else ""))
+
+
+def fos(
+    model: ModelArg = None,
+    example: ExampleOpt = None,
+    out_dir: OutOpt = None,
+    overwrite: OverwriteOpt = False,
+    json_: JsonOpt = False,
+    quiet: QuietOpt = False,
+    debug: DebugOpt = False,
+) -> None:
+    """Factor of safety by shear strength reduction: the value and its bracket.
+
+    With --out the tables describe the last equilibrium (the stable end of the
+    bracket); result.json also lists the blocks moving at the unstable end.
+    """
+    with _guard(debug):
+        from ..analysis import factor_of_safety
+        from ..output import check_output_dir, fos_summary
+
+        # the progress hooks are looked up on the package at call time, so that
+        # rockdem.cli._step_hook and rockdem.cli._trial_hook stay patchable
+        from . import _trial_hook
+
+        path, m, cfg = _load(model, example)
+        if out_dir is not None:
+            check_output_dir(out_dir, overwrite=overwrite)
+        with _progress(quiet, "strength reduction") as bar:
+            task = bar.add_task("strength reduction trials", total=None)
+            result = factor_of_safety(m, **_fos_options(cfg), progress=_trial_hook(bar, task))
+        doc = {**_header(path, m, cfg), "command": "fos", **fos_summary(result)}
+        if out_dir is not None:
+            state = result.stable_analysis or result.failed_analysis
+            from ..output import analysis_summary
+
+            extra = {"analysis": analysis_summary(state), "model": cfg.model_dump(mode="json")}
+            _write(out_dir, state, {**doc, **extra}, overwrite, quiet or json_)
+        if json_:
+            _echo_json(doc)
+            return
+        _print_fos(doc)
+
+
+def _print_fos(doc: dict[str, Any]) -> None:
+    out.print(f"[bold]{escape(doc['model_name'])}[/bold]  ({escape(doc['model_file'])})")
+    lo, hi = doc["bracket"]
+    n = len(doc["trials"])
+    if doc["factor_of_safety"] is not None:
+        out.print(f"factor of safety: [bold]{doc['factor_of_safety']:.4f}[/bold]")
+        out.print(f"bracket: stable at {lo:.4f}, unstable at {hi:.4f} ({n} trials)")
+    elif doc["mode"] == "no-failure":
+        out.print(
+            f"factor of safety: > {lo:.4g} (no failure up to the largest factor tried, {n} trials)"
+        )
+    else:
+        out.print(
+            "factor of safety: none: the mechanism forms even with the strengths scaled by "
+            f"{hi:.4g} (toppling or a free block; strength does not control it)"
+        )
+    blocks = doc["mechanism_blocks"]
+    if blocks:
+        out.print(f"mechanism blocks ({len(blocks)}): {_ids(blocks)}")
+    out.print(f"definition: {escape(doc['definition'])}")

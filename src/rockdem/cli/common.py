@@ -1,0 +1,218 @@
+"""What every command shares: the app, the consoles, the options, the one-line
+errors and exit codes, loading the model, progress bars and JSON output."""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Annotated, Any
+
+import typer
+from rich.console import Console
+from rich.markup import escape
+from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+
+from .. import __version__
+
+EXIT_OK, EXIT_FAILED, EXIT_INPUT = 0, 1, 2
+
+app = typer.Typer(
+    name="rockdem",
+    help="Stability of jointed rock slopes by the discrete element method.\n\n"
+    "Check a model file, run the staged gravity analysis, find the factor of safety "
+    "by strength reduction, write an HTML report or draw one figure.  "
+    "Start from a bundled example: `rockdem example list`.",
+    no_args_is_help=True,
+    add_completion=False,
+    pretty_exceptions_enable=False,
+    rich_markup_mode=None,
+)
+example_app = typer.Typer(
+    help="The bundled example models.", no_args_is_help=True, rich_markup_mode=None
+)
+app.add_typer(example_app, name="example")
+
+out = Console(highlight=False, soft_wrap=True)
+err = Console(stderr=True, highlight=False, soft_wrap=True)
+
+
+# ---------------------------------------------------------------- options
+ModelArg = Annotated[
+    Path | None,
+    typer.Argument(help="Model file (.yaml, .yml, .json or .toml).", show_default=False),
+]
+ExampleOpt = Annotated[
+    str | None,
+    typer.Option(
+        "--example", "-e", help="Use a bundled example instead of a file.", metavar="NAME"
+    ),
+]
+JsonOpt = Annotated[
+    bool, typer.Option("--json", help="Print one JSON object to stdout (for scripts).")
+]
+OutOpt = Annotated[
+    Path | None,
+    typer.Option(
+        "--out",
+        "-o",
+        help="Write blocks.csv, interfaces.csv, springs.csv and result.json into this folder.",
+        metavar="DIR",
+    ),
+]
+OverwriteOpt = Annotated[
+    bool, typer.Option("--overwrite", help="Replace result files that exist already.")
+]
+QuietOpt = Annotated[
+    bool, typer.Option("--quiet", "-q", help="No progress bars or notes on stderr.")
+]
+DebugOpt = Annotated[bool, typer.Option("--debug", help="Show the full traceback of errors.")]
+JointOpt = Annotated[
+    list[str] | None,
+    typer.Option(
+        "--joint",
+        "-j",
+        help="Plot the stresses along this joint: a joint name, or "
+        "the number (0, 1, ...) of a `joint_lines` trace.",
+        metavar="NAME",
+        show_default=False,
+    ),
+]
+
+
+def _version(value: bool) -> None:
+    if value:
+        typer.echo(f"rockdem {__version__}")
+        raise typer.Exit()
+
+
+@app.callback()
+def _root(
+    version: Annotated[
+        bool | None,
+        typer.Option(
+            "--version", callback=_version, is_eager=True, help="Print the version and exit."
+        ),
+    ] = None,
+) -> None:
+    """Stability of jointed rock slopes by the discrete element method."""
+
+
+# ------------------------------------------------------------------ errors
+@contextmanager
+def _guard(debug: bool) -> Iterator[None]:
+    """Map errors to one line on stderr and an exit code (or a traceback with --debug)."""
+    from pydantic import ValidationError
+
+    from ..errors import InputError
+
+    try:
+        yield
+    except typer.Exit:
+        raise
+    except (InputError, ValidationError) as exc:
+        if debug:
+            raise
+        text = str(exc) if isinstance(exc, InputError) else str(exc).splitlines()[0]
+        err.print(f"error: {escape(text)}")
+        raise typer.Exit(EXIT_INPUT) from None
+    except KeyboardInterrupt:
+        err.print("interrupted")
+        raise typer.Exit(130) from None
+    except Exception as exc:
+        if debug:
+            raise
+        err.print(
+            f"error: the analysis failed: {type(exc).__name__}: {escape(str(exc))} "
+            "(run again with --debug for the traceback)"
+        )
+        raise typer.Exit(EXIT_FAILED) from None
+
+
+def _model_path(model: Path | None, example: str | None) -> Path:
+    from ..errors import InputError
+    from ..examples import example_path
+
+    if (model is None) == (example is None):
+        raise InputError(
+            "MODEL",
+            "give either a model file or --example NAME" + (", not both" if model else ""),
+            "see `rockdem example list`",
+        )
+    return example_path(example) if example is not None else model
+
+
+def _load(model: Path | None, example: str | None):
+    from ..config import load_model
+
+    path = _model_path(model, example)
+    m, cfg = load_model(path)
+    return path, m, cfg
+
+
+@contextmanager
+def _progress(quiet: bool, label: str) -> Iterator[Progress]:
+    """A progress bar on stderr (nothing with --quiet or when stderr is not a terminal)."""
+    progress = Progress(
+        TextColumn("{task.description}"),
+        BarColumn(),
+        MofNCompleteColumn(),
+        TimeElapsedColumn(),
+        console=err,
+        transient=True,
+        disable=quiet or not err.is_terminal,
+    )
+    with progress:
+        yield progress
+
+
+def _echo_json(data: dict[str, Any]) -> None:
+    from ..output import jsonable
+
+    typer.echo(json.dumps(jsonable(data), indent=1, allow_nan=False))
+
+
+def _header(path: Path, model, cfg) -> dict[str, Any]:
+    return {
+        "rockdem_version": __version__,
+        "model_file": str(path),
+        "model_name": model.name,
+        "units": cfg.units,
+    }
+
+
+def _step_hook(bar: Progress, task) -> Callable[[int, int], None]:
+    def hook(step: int, n: int) -> None:
+        bar.update(task, completed=step, total=n)
+
+    return hook
+
+
+def _trial_hook(bar: Progress, task) -> Callable[[Any], None]:
+    def hook(trial) -> None:
+        verdict = "stable" if trial.stable else "unstable"
+        bar.update(task, advance=1, description=f"trial F = {trial.factor:.4f}: {verdict}")
+
+    return hook
+
+
+def _fos_options(cfg) -> dict[str, float]:
+    """The strength-reduction settings of the model file (``analysis.strength_reduction``)."""
+    sr = cfg.analysis.strength_reduction
+    return {
+        "width": sr.width,
+        "start": sr.start,
+        "grow": sr.grow,
+        "smallest": sr.smallest,
+        "largest": sr.largest,
+    }
+
+
+def _plural(n: int, word: str) -> str:
+    return f"{n} {word}" + ("" if n == 1 else "s")
+
+
+def _ids(values: list[int], limit: int = 40) -> str:
+    text = ", ".join(str(v) for v in values[:limit])
+    return text + (f", ... ({len(values) - limit} more)" if len(values) > limit else "")
