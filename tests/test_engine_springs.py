@@ -29,7 +29,7 @@ def test_quadrature_weights_sum_to_length_and_integrate_quadratics(rule, n):
 
 @pytest.mark.parametrize("rule,n", [("lobatto", 3), ("gauss", 2), ("lobatto", 4), ("gauss", 3)])
 def test_elastic_stiffness_equals_the_papers_lumped_form(rule, n):
-    """Seed paper Eq. 3 (with Eq. 1-2 corrected, METHOD.md 7): at the interface
+    """Seed paper Eq. 3 (with Eq. 1-2 corrected, docs/method.md section 2): at the interface
     midpoint P the stiffness is diag(kn L, ks L, kn L^3 / 12) in (n, s, w)."""
     L, kn, ks = 2.0, 3e6, 1.2e6
     system = _two_blocks(L=L, kn=kn, ks=ks, rule=rule, n=n)

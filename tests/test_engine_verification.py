@@ -1,4 +1,4 @@
-"""Verification against closed-form solutions (METHOD.md section 6).
+"""Verification against closed-form solutions (docs/method.md, section 5).
 
 Each assert holds the closed form; tolerances are stated with their reason.
 The factor of safety is the midpoint of a bracket of width <= 0.005 by
@@ -94,7 +94,7 @@ def test_toppling_is_not_rated_by_strength_reduction():
     "p1,p2,stable", [(35, 30, False), (35, 31, False), (36, 30, True), (35, 32, True)]
 )
 def test_wedge_verdicts(p1, p2, stable):
-    """The four rows of METHOD.md section 6: unstable where the thrust F > 0."""
+    """The four rows of docs/method.md, section 5: unstable where the thrust F > 0."""
     thrust = V.wedge_thrust(200, 75, 37, 27, p1, p2, 35)
     assert (thrust < 0) == stable
     assert rd.analyse(V.two_block_wedge(p1, p2)).stable == stable

@@ -55,7 +55,7 @@ def test_wedge_verdict_and_factor_of_safety_match_the_closed_form(name):
     assert np.allclose(weights, [75.0, 200.0])
     thrust = wedge_thrust(200, 75, 37, 27, p1, p2, p3)
     a = rd.analyse(model)
-    assert a.stable == (thrust < 0)  # METHOD.md section 6: F > 0 means support needed
+    assert a.stable == (thrust < 0)  # docs/method.md section 5: F > 0 means support needed
     exact = wedge_fos(200, 75, 37, 27, p1, p2, p3)
     sr = cfg.analysis.strength_reduction
     fos = rd.factor_of_safety(model, width=sr.width)

@@ -5,7 +5,7 @@ Mohr-Coulomb with return mapping.  The law is evaluated from the state
 *committed* at the last converged step plus the current total relative
 displacement; the state changes only through :func:`commit`.
 
-Sign conventions (METHOD.md section 2): ``dn > 0`` opens, ``sigma`` is
+Sign conventions (docs/method.md, section 2): ``dn > 0`` opens, ``sigma`` is
 compression-positive (``sigma = -kn dn``), ``tau = ks (ds - slip)``.
 The generalised forces conjugate to ``(dn, ds)`` are ``(-sigma, tau)``.
 """

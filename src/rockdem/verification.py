@@ -1,4 +1,4 @@
-"""Models with closed-form answers (METHOD.md section 6), and generated test slopes.
+"""Models with closed-form answers (docs/method.md, section 5), and generated test slopes.
 
 These builders are used by the verification tests, the benchmarks and the
 examples.  Each returns a :class:`~rockdem.model.Model` built from explicit
@@ -80,7 +80,7 @@ def wedge_fos(w1, w2, d1, d2, p1, p2, p3) -> float:
 
     The factor ``f`` dividing all three ``tan(phi)`` that makes the thrust
     zero; where the interface force at that root is tensile the blocks
-    separate and the weaker single block governs (METHOD.md section 6).
+    separate and the weaker single block governs (docs/method.md, section 5).
     """
 
     def reduced(f):
