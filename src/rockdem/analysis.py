@@ -14,10 +14,10 @@ import logging
 from collections.abc import Callable
 
 import numpy as np
-import scipy.sparse.linalg as spla
 from scipy.sparse import coo_array
 from scipy.sparse.csgraph import connected_components
 
+from .linalg import factorize
 from .model import Model
 from .results import Analysis, Evidence, FactorOfSafety, Step, Trial, tabulate
 from .solver import Solve, System, build_system, residual, solve_equilibrium
@@ -113,7 +113,7 @@ def _mechanism(system: System, sol: Solve, state, load_factor, factor):
     resp, r = residual(system, sol.q, state, load_factor, factor)
     J = asm.stiffness(resp.d_nn, resp.d_sn, resp.d_ss, 1e-6, system.K0)
     try:
-        d = spla.splu(J).solve(r)
+        d = factorize(J).solve(r)
     except RuntimeError:
         d = sol.direction
     if np.dot(d, system.f_ext) < 0:  # the loads do positive work on the mechanism

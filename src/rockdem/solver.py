@@ -25,12 +25,12 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 import scipy.sparse as sp
-import scipy.sparse.linalg as spla
 
 from .assembly import Assembly, build_assembly
 from .blocks import Blocks
 from .errors import InputError
 from .interfaces import Interfaces, assign_joints, find_interfaces
+from .linalg import factorize
 from .loads import block_loads
 from .model import Model
 from .spring_law import Response, SpringState, evaluate
@@ -108,7 +108,7 @@ def build_system(model: Model, f_block: np.ndarray | None = None) -> System:
     elastic = 1.0
     if asm.n_dof:
         try:
-            lu0 = spla.splu(K0, permc_spec="COLAMD")
+            lu0 = factorize(K0)
         except RuntimeError as exc:
             raise InputError(
                 "model",
@@ -150,7 +150,7 @@ def residual(system: System, q, state, load_factor, factor):
 
 def _lu(J):
     try:
-        return spla.splu(J, permc_spec="COLAMD")
+        return factorize(J)
     except RuntimeError:  # exactly singular
         return None
 
