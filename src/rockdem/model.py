@@ -36,8 +36,9 @@ class PointLoad:
     @classmethod
     def anchor(cls, x: float, y: float, force: float, angle: float, name: str = "") -> PointLoad:
         """A support force of magnitude ``force`` acting at ``angle`` degrees
-        counter-clockwise from +x (for example 180 - 15 pulls into a face
-        that looks toward +x, 15 degrees below horizontal)."""
+        counter-clockwise from +x (for example 195 = 180 + 15 pulls a face
+        that looks toward +x back into the slope, 15 degrees below the
+        horizontal, as an anchor drilled downward does)."""
         a = np.radians(angle)
         return cls(x, y, force * np.cos(a), force * np.sin(a), support=True, name=name)
 
