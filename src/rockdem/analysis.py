@@ -261,6 +261,30 @@ def analyse(
     return _package(system, sol, state, lam_prev, strength_factor, True, steps, q)
 
 
+def analyse_from(
+    model: Model | System,
+    state: SpringState,
+    q0: np.ndarray,
+    *,
+    stage: int = 1,
+    strength_factor: float = 1.0,
+) -> Analysis:
+    """Solve the full load once, from a given spring state and displacements.
+
+    For sequences of models that carry the state forward (excavation in
+    stages): ``state`` and ``q0`` (free-dof displacements) describe this
+    model's springs and blocks, mapped from the previous stage.  Failures
+    found here are recorded with ``stage``.
+    """
+    system = model if isinstance(model, System) else build_system(model)
+    sol, new_state = _settle(system, state, q0, 1.0, strength_factor, stage)
+    n_failed = int((new_state.yielded | new_state.broken).sum())
+    steps = (Step(stage, 1.0, strength_factor, sol.converged, _evidence(sol), n_failed),)
+    if sol.converged:
+        return _package(system, sol, new_state, 1.0, strength_factor, True, steps, sol.q)
+    return _package(system, sol, state, 0.0, strength_factor, False, steps, q0)
+
+
 def factor_of_safety(
     model: Model | System,
     *,

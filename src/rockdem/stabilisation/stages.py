@@ -17,9 +17,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..analysis import _package, _settle, analyse
+from ..analysis import analyse, analyse_from
 from ..model import Model
-from ..results import Analysis, Evidence, Step
+from ..results import Analysis
 from ..solver import System, build_system
 from ..spring_law import SpringState
 from . import _edit
@@ -187,14 +187,7 @@ def excavate_in_stages(model: Model, stages: Sequence[Stage], *,
         if carry:
             state0 = carry_state(prev_sys, prev.state, sys_k)
             q0 = _carry_q(prev_sys, prev.displacement, sys_k)
-            sol, state = _settle(sys_k, state0, q0, 1.0, 1.0, step)
-            ev = Evidence(sol.reason, sol.iterations, tuple(sol.residuals))
-            n_failed = int((state.yielded | state.broken).sum())
-            steps = (Step(step, 1.0, 1.0, sol.converged, ev, n_failed),)
-            if sol.converged:
-                a = _package(sys_k, sol, state, 1.0, 1.0, True, steps, sol.q)
-            else:
-                a = _package(sys_k, sol, state0, 0.0, 1.0, False, steps, q0)
+            a = analyse_from(sys_k, state0, q0, stage=step)
             before = _failed_keys(prev_sys, prev)
             now = _keys(sys_k)
             new = [i for key, i in now.items() if a.interfaces.state[i] > 0
