@@ -46,6 +46,8 @@ class Assembly:
     indices: np.ndarray
     scatter: np.ndarray  # (n_interfaces * 36,) position in data, or -1
     length_scale: float
+    #: ``B`` as one sparse (2 n_springs, n_dof) operator: rows dn0, ds0, dn1, ...
+    operator: sp.csr_array | None = None
 
     @property
     def nnz(self) -> int:
@@ -61,15 +63,12 @@ class Assembly:
     # ---------------------------------------------------------- kinematics
     def relative_displacement(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """``(dn, ds)`` at every spring point for free-dof displacements ``q``."""
-        qe = np.append(q, 0.0)[self.columns]  # index -1 -> the appended zero
-        d = np.einsum("kij,kj->ki", self.B, qe)
+        d = (self.operator @ q).reshape(-1, 2)
         return d[:, 0], d[:, 1]
 
     def internal_force(self, force: np.ndarray) -> np.ndarray:
         """``sum_k w_k B_k^T p_k`` for generalised forces ``p`` (n_springs, 2)."""
-        local = np.einsum("kij,ki->kj", self.B, force * self.weight[:, None])
-        valid = self.columns >= 0
-        return np.bincount(self.columns[valid], local[valid], minlength=self.n_dof)
+        return self.operator.T @ (force * self.weight[:, None]).ravel()
 
     def stiffness(self, d_nn, d_sn, d_ss, shift: float = 0.0, base=None) -> sp.csc_array:
         """Tangent ``sum w B^T D B`` (+ ``shift * base``) on the fixed pattern.
@@ -133,6 +132,14 @@ def build_assembly(blocks: Blocks, faces: Interfaces, springs: Springs) -> Assem
     col_of = unique // max(n_dof, 1)
     indptr = np.concatenate([[0], np.cumsum(np.bincount(col_of, minlength=n_dof))]).astype(np.int32)
     length_scale = float(np.sqrt(np.mean(np.abs(blocks.area)))) or 1.0
+    # the sparse operator: entry (2k + row, column) = B[k, row, j]; fixed dofs dropped
+    op_rows = np.broadcast_to(2 * np.arange(springs.n_springs)[:, None, None], B.shape)
+    op_rows = op_rows + np.arange(2)[None, :, None]
+    op_cols = np.broadcast_to(columns[:, None, :], B.shape)
+    keep = op_cols >= 0
+    operator = sp.csr_array(
+        (B[keep], (op_rows[keep], op_cols[keep])), shape=(2 * springs.n_springs, n_dof)
+    )
     return Assembly(
         dof,
         n_dof,
@@ -144,4 +151,5 @@ def build_assembly(blocks: Blocks, faces: Interfaces, springs: Springs) -> Assem
         indices,
         scatter,
         length_scale,
+        operator,
     )

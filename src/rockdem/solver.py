@@ -30,7 +30,7 @@ from .assembly import Assembly, build_assembly
 from .blocks import Blocks
 from .errors import InputError
 from .interfaces import Interfaces, assign_joints, find_interfaces
-from .linalg import factorize
+from .linalg import Factorizer, factorize
 from .loads import block_loads
 from .model import Model
 from .spring_law import Response, SpringState, evaluate
@@ -74,6 +74,8 @@ class System:
     f_ext: np.ndarray  # (n_dof,)
     elastic_scale: float  # scaled size of the elastic displacement under f_ext
     lu0: object = field(default=None)
+    #: one factorisation handle for all tangents (symbolic analysis reused)
+    factorizer: Factorizer = field(default_factory=Factorizer)
 
     def __repr__(self) -> str:
         return (
@@ -148,9 +150,9 @@ def residual(system: System, q, state, load_factor, factor):
     return resp, r
 
 
-def _lu(J):
+def _lu(system, J):
     try:
-        return factorize(J)
+        return system.factorizer.factorize(J)
     except RuntimeError:  # exactly singular
         return None
 
@@ -178,7 +180,7 @@ def _newton(system, state, load_factor, factor, q, max_it):
     for it in range(1, max_it + 1):
         if merit <= tol:
             return Solve(True, q, resp, it - 1, history, "converged", direction)
-        lu = _lu(asm.stiffness(resp.d_nn, resp.d_sn, resp.d_ss, beta, system.K0))
+        lu = _lu(system, asm.stiffness(resp.d_nn, resp.d_sn, resp.d_ss, beta, system.K0))
         if lu is None:
             beta *= 10.0
             if beta > BETA_MAX:
