@@ -12,11 +12,13 @@ from __future__ import annotations
 
 import logging
 from collections.abc import Callable
+from dataclasses import replace
 
 import numpy as np
 from scipy.sparse import coo_array
 from scipy.sparse.csgraph import connected_components
 
+from .certificate import admissible_load
 from .linalg import factorize
 from .model import Model
 from .results import Analysis, Evidence, FactorOfSafety, Step, Trial, tabulate
@@ -31,6 +33,11 @@ MAX_CASCADE = 100
 MECHANISM_SHARE = 0.01
 #: a spring point holds when its strength exceeds its shear stress by this factor
 HOLD_MARGIN = 1.01
+#: a failed load step is retried in up to this many equal sub-steps (halving)
+MAX_SUBSTEPS = 8
+#: the equilibrium LP is solved for models up to this many spring points
+#: (HiGHS interior point: ~2 s at 2,800 springs, growing faster than linearly)
+CERTIFY_MAX_SPRINGS = 15_000
 
 
 def _settle(
@@ -97,6 +104,47 @@ def _evidence(sol: Solve) -> Evidence:
     return Evidence(
         sol.reason, sol.iterations, tuple(sol.residuals), None, sol.reached, sol.failed_at
     )
+
+
+def _certified(system: System, ev: Evidence, state, load_factor: float, factor: float):
+    """``ev`` with the equilibrium LP's verdict on a failed solve at
+    (``load_factor``, ``factor``) with the strengths of ``state``."""
+    n = system.springs.n_springs
+    if n > CERTIFY_MAX_SPRINGS:
+        text = f"equilibrium LP not solved ({n:,} spring points > {CERTIFY_MAX_SPRINGS:,})"
+        return replace(ev, certified=False, certificate=text)
+    cert = admissible_load(system, state, load_factor, factor)
+    return replace(ev, certified=cert.proves_failure, certificate=str(cert))
+
+
+def _load_step(system, state, q, lam_prev, lam, factor, stage):
+    """Settle the load at ``lam`` from equilibrium at ``lam_prev``; where the
+    whole increment fails, retry it in smaller sub-steps (halving, down to
+    1/MAX_SUBSTEPS of it), committing the state after each.
+
+    A Newton failure on a large increment is not yet a verdict: with brittle
+    strength the state jumps at each commit, and smaller increments follow
+    the loading path.  Returns ``(solve, state, q, lam_reached)``.
+    """
+    full = lam - lam_prev
+    inc = full
+    iterations, history = 0, []
+    while True:
+        target = min(lam, lam_prev + inc)
+        q0 = q * (target / lam_prev) if lam_prev > 0 else q
+        sol, new_state = _settle(system, state, q0, target, factor, stage)
+        iterations += sol.iterations
+        history += sol.residuals
+        if sol.converged:
+            state, q, lam_prev = new_state, sol.q, target
+            if lam_prev >= lam * (1 - 1e-12):
+                break
+            continue
+        if inc <= full / MAX_SUBSTEPS * (1 + 1e-9):
+            break
+        inc *= 0.5
+    sol = replace(sol, iterations=iterations, residuals=history)
+    return sol, state, q, lam_prev
 
 
 def _mechanism(system: System, sol: Solve, state, load_factor, factor):
@@ -247,17 +295,17 @@ def analyse(
     sol = None
     for k in range(1, n_steps + 1):
         lam = k / n_steps
-        q0 = q * (lam / lam_prev) if lam_prev > 0 else q
-        sol, new_state = _settle(system, state, q0, lam, strength_factor, k)
+        sol, state, q, lam_prev = _load_step(system, state, q, lam_prev, lam, strength_factor, k)
         ev = _evidence(sol)
-        n_failed = int((new_state.yielded | new_state.broken).sum())
+        if not sol.converged:
+            ev = _certified(system, ev, state, lam, strength_factor)
+        n_failed = int((state.yielded | state.broken).sum())
         steps.append(Step(k, lam, strength_factor, sol.converged, ev, n_failed))
         if progress is not None:
             progress(k, n_steps)
         if not sol.converged:
             log.info("load step %d/%d: no equilibrium (%s)", k, n_steps, ev)
             return _package(system, sol, state, lam_prev, strength_factor, False, steps, q)
-        state, q, lam_prev = new_state, sol.q, lam
     return _package(system, sol, state, lam_prev, strength_factor, True, steps, q)
 
 
@@ -418,6 +466,8 @@ def _continue(system: System, base: Analysis, factor: float, stage: int, q0=None
         system, start, q0, lam, factor, stage, base.strength_factor, True, resolution
     )
     ev = _evidence(sol)
+    if not sol.converged:
+        ev = _certified(system, ev, start, lam, min(factor, sol.failed_at or factor))
     n_failed = int((state.yielded | state.broken).sum())
     step = Step(stage, lam, factor, sol.converged, ev, n_failed)
     steps = (*base.steps, step)

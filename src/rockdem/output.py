@@ -266,9 +266,7 @@ _COLUMNS = {
         "shear_force normal_stress shear_stress state failed_fraction local_fos "
         "first_failure slip_surface".split()
     ),
-    "springs": list(
-        "interface point x y sigma tau capacity state first_failure local_fos".split()
-    ),
+    "springs": list("interface point x y sigma tau capacity state first_failure local_fos".split()),
 }
 
 

@@ -20,11 +20,24 @@ class Evidence:
     certified: bool | None = None  # failure proven by the equilibrium LP (None: not checked)
     reached: float | None = None  # strength homotopy: largest factor found in equilibrium
     failed_at: float | None = None  # ... and the factor just beyond it that failed
+    #: the equilibrium LP's statement (rockdem.certificate), when it was solved
+    certificate: str | None = None
+
+    @property
+    def proof(self) -> str | None:
+        """How a failure is known: ``"lp-certificate"`` (no statically admissible
+        force field exists: proven), ``"undecided"`` (the solver found no
+        equilibrium but nothing proves that none exists); None if converged."""
+        if self.reason == "converged" or self.reason == "no load":
+            return None
+        return "lp-certificate" if self.certified else "undecided"
 
     def __str__(self) -> str:
         last = self.residuals[-1] if self.residuals else float("nan")
-        cert = "" if self.certified is None else f", LP certificate: {self.certified}"
-        return f"{self.reason} after {self.iterations} iterations (residual {last:.2e}{cert})"
+        text = f"{self.reason} after {self.iterations} iterations (residual {last:.2e})"
+        if self.certificate is not None:
+            text += f"; {self.certificate}"
+        return text
 
 
 @dataclass(frozen=True, eq=False)
@@ -197,6 +210,27 @@ class FactorOfSafety:
     stable_analysis: Analysis | None
     failed_analysis: Analysis | None
     definition: str
+
+    @property
+    def proof(self) -> str | None:
+        """How the upper end of the bracket is known to fail: ``"lp-certificate"``
+        (proven: no admissible force field) or ``"undecided"`` (the solver
+        found no equilibrium there, nothing proves none exists: the factor
+        of safety may be higher); None without a failed trial."""
+        if self.failed_analysis is None:
+            return None
+        return self.failed_analysis.evidence.proof
+
+    @property
+    def certified_upper_bound(self) -> float | None:
+        """Smallest factor at which the equilibrium LP proved that no
+        admissible force field exists (a rigorous upper bound), or None."""
+        bounds = [
+            min(t.factor, t.evidence.failed_at or t.factor)
+            for t in self.trials
+            if not t.stable and t.evidence.certified
+        ]
+        return min(bounds) if bounds else None
 
     def __repr__(self) -> str:
         if self.value is None:

@@ -1,0 +1,102 @@
+"""Proof of "no equilibrium": the statically admissible force field LP.
+
+Any equilibrium the DEM finds is a set of spring-point forces, normal
+``N_k >= -T_k`` (tensile capacity) and shear ``|S_k| <= c_k w_k + N_k tan phi_k``
+(strengths divided by the factor), that balances the loads.  The linear
+program
+
+    maximise mu  subject to  B^T [-N; S] = mu f_ext,  the strength limits,
+                             0 <= mu <= MU_CAP
+
+finds the largest multiple ``mu`` of the loads that such a force field can
+carry (HiGHS, through SciPy).  If ``mu < load_factor`` no solver can find
+equilibrium there: a rigorous proof of failure.  ``mu >= load_factor``
+proves nothing (friction without dilatancy can fail earlier), so it only
+confirms failures.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+from scipy.optimize import linprog
+
+from .spring_law import SpringState, strength
+
+#: the LP stops at this multiple of the load (the answer "at least this")
+MU_CAP = 2.0
+#: certified when the admissible multiple falls short of the load by this share
+MARGIN = 1e-6
+
+
+@dataclass(frozen=True)
+class Certificate:
+    """Largest admissible load multiple ``mu`` at a strength factor."""
+
+    load_factor: float
+    strength_factor: float
+    mu: float | None  # None: the LP solver gave no answer
+    status: str
+
+    @property
+    def proves_failure(self) -> bool:
+        return self.mu is not None and self.mu < self.load_factor * (1.0 - MARGIN)
+
+    def __str__(self) -> str:
+        if self.mu is None:
+            return f"equilibrium LP: no answer ({self.status})"
+        verdict = "no admissible force field" if self.proves_failure else "admissible"
+        return (
+            f"equilibrium LP at F = {self.strength_factor:.6g}: loads x{self.mu:.4g} "
+            f"carried at most ({verdict} at x{self.load_factor:.4g})"
+        )
+
+
+def admissible_load(system, state: SpringState, load_factor: float, factor: float) -> Certificate:
+    """Solve the LP for ``system`` with the strengths of ``state`` divided by ``factor``."""
+    asm = system.assembly
+    springs = system.springs
+    n = springs.n_springs
+    f = system.f_ext * asm.dof_scale
+    f_scale = float(np.max(np.abs(f))) if asm.n_dof else 0.0
+    if asm.n_dof == 0 or f_scale == 0.0:
+        return Certificate(load_factor, factor, MU_CAP, "no load")
+    c, tan_phi, tensile = strength(springs, state, factor, system.model.settings.reduce_tensile)
+    w = springs.weight
+    op = sp.csr_array(asm.operator)
+    scale = sp.diags_array(asm.dof_scale / f_scale)
+    # equilibrium rows (scaled forces and moments / length): -Bn^T N + Bs^T S - mu f = 0
+    A_eq = sp.hstack([-(op[0::2].T), op[1::2].T], format="csr")
+    A_eq = sp.hstack([scale @ A_eq, sp.csr_array(-(f / f_scale)[:, None])], format="csr")
+    eye = sp.eye_array(n, format="csr")
+    T = sp.diags_array(tan_phi)
+    # +S - tan N <= c w ;  -S - tan N <= c w   (forces scaled by f_scale)
+    A_ub = sp.vstack(
+        [
+            sp.hstack([-T, eye, sp.csr_array((n, 1))]),
+            sp.hstack([-T, -eye, sp.csr_array((n, 1))]),
+        ],
+        format="csr",
+    )
+    b_ub = np.concatenate([c * w, c * w]) / f_scale
+    lower_n = -tensile * w / f_scale
+    bounds = np.empty((2 * n + 1, 2))
+    bounds[:n] = np.column_stack([lower_n, np.full(n, np.inf)])
+    bounds[n : 2 * n] = (-np.inf, np.inf)
+    bounds[2 * n] = (0.0, MU_CAP)
+    cost = np.zeros(2 * n + 1)
+    cost[-1] = -1.0
+    res = linprog(
+        cost,
+        A_ub=A_ub,
+        b_ub=b_ub,
+        A_eq=A_eq,
+        b_eq=np.zeros(asm.n_dof),
+        bounds=bounds,
+        method="highs-ipm",
+    )
+    if res.status != 0:
+        return Certificate(load_factor, factor, None, res.message)
+    return Certificate(load_factor, factor, float(res.x[-1]), "optimal")

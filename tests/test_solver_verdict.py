@@ -1,0 +1,110 @@
+"""The solver's verdict: "no equilibrium" carries its proof, and does not
+depend on the number of load steps.
+
+Closed forms: planar sliding FS = tan(phi)/tan(dip) (Hoek & Bray, Rock Slope
+Engineering, 4th ed., ch. 6, dry plane failure with c = 0); the two-block
+wedge's thrust, Eq. 7 of the seed paper (docs/method.md, section 5);
+toppling of a block iff b/h < tan(psi) (Goodman & Bray 1976).
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+import rockdem as rd
+from rockdem import verification as V
+from rockdem.certificate import admissible_load
+from rockdem.config import load_model
+from rockdem.examples import example_path
+from rockdem.spring_law import SpringState
+
+pytestmark = pytest.mark.filterwarnings("ignore::DeprecationWarning")
+
+
+def _lp(model, factor):
+    system = rd.build_system(model)
+    return admissible_load(system, SpringState.initial(system.springs.n_springs), 1.0, factor)
+
+
+@pytest.mark.parametrize(("dip", "phi"), [(20, 30), (30, 35), (35, 40)])
+def test_lp_certificate_brackets_planar_sliding(dip, phi):
+    """The LP proves failure 0.5% above tan(phi)/tan(dip) and admits 0.5% below."""
+    model = V.block_on_plane(dip, rd.Joint(normal_stiffness=1e6, friction_angle=phi))
+    exact = np.tan(np.radians(phi)) / np.tan(np.radians(dip))
+    assert _lp(model, exact * 1.005).proves_failure
+    assert not _lp(model, exact * 0.995).proves_failure
+
+
+@pytest.mark.parametrize(("p1", "p2"), [(35, 30), (36, 30)])
+def test_lp_certificate_brackets_the_two_block_wedge(p1, p2):
+    """Seed paper Eq. 7: the LP's limit is the root of the wedge thrust within 0.3%."""
+    model = V.two_block_wedge(p1, p2)
+    exact = V.wedge_fos(200, 75, 37, 27, p1, p2, 35)
+    assert _lp(model, exact * 1.003).proves_failure
+    assert not _lp(model, exact * 0.997).proves_failure
+
+
+def test_unstable_wedge_failure_is_proven():
+    """phi1 = 35, phi2 = 30: F = +2.64 t > 0, unstable; the verdict carries its LP proof."""
+    a = rd.analyse(V.two_block_wedge(35, 30))
+    assert not a.stable
+    assert a.evidence.proof == "lp-certificate"
+    assert a.evidence.certified is True
+
+
+def test_toppling_block_failure_is_proven():
+    """b/h = 0.9 tan(psi): topples (Goodman & Bray); no admissible field exists."""
+    psi = 25.0
+    h = 2.0
+    a = rd.analyse(V.toppling_block(psi, 0.9 * np.tan(np.radians(psi)) * h, h))
+    assert not a.stable
+    assert a.evidence.proof == "lp-certificate"
+
+
+def test_stable_result_has_no_proof_kind():
+    a = rd.analyse(V.two_block_wedge(36, 30))
+    assert a.stable
+    assert a.evidence.proof is None
+
+
+def test_factor_of_safety_reports_its_proof_and_certified_bound():
+    fos = rd.factor_of_safety(V.two_block_wedge(35, 30))
+    exact = V.wedge_fos(200, 75, 37, 27, 35, 30, 35)
+    assert fos.proof in {"lp-certificate", "undecided"}
+    bound = fos.certified_upper_bound
+    assert bound is not None
+    assert exact <= bound * (1 + 1e-3)  # a rigorous upper bound
+    assert fos.bracket[0] <= exact * (1 + 1e-3)
+
+
+def _bedded(tmp_path, steps):
+    text = example_path("bedded-slope").read_text()
+    path = tmp_path / f"steps{steps}.yaml"
+    path.write_text(re.sub(r"load_steps: \d+", f"load_steps: {steps}", text))
+    return load_model(path)[0]
+
+
+@pytest.mark.slow
+def test_bedded_slope_fos_does_not_depend_on_load_steps(tmp_path):
+    """Brittle bedding cohesion: the same FS (2%) for 1-40 steps, near planar
+    sliding on c = 0 bedding, tan35/tan30 = 1.2128 (within 3%)."""
+    planar = np.tan(np.radians(35)) / np.tan(np.radians(30))
+    values = {n: rd.factor_of_safety(_bedded(tmp_path, n)).value for n in (1, 2, 5, 10, 20, 40)}
+    lo, hi = min(values.values()), max(values.values())
+    assert hi / lo - 1 < 0.02, values
+    for v in values.values():
+        assert abs(v / planar - 1) < 0.03, values
+
+
+def test_cohesionless_staged_analysis_does_not_depend_on_load_steps():
+    """c = 0: the problem is homogeneous in the load, so the steps change nothing."""
+    model = V.bedding_slope(height=6.0, bedding_spacing=1.0, cross_spacing=1.5, behind=8.0)
+    fs = [
+        rd.factor_of_safety(model.replace(settings=replace(model.settings, load_steps=n))).value
+        for n in (1, 4)
+    ]
+    assert abs(fs[0] / fs[1] - 1) < 0.005, fs
