@@ -73,8 +73,25 @@ def one_size(n: int, repeat: int, fos: bool) -> dict:
         stable=an.stable,
     )
     if fos:
+        from rockdem.linalg import Factorizer, backend
+
+        before = system.factorizer.count
         t_fos, result = _median_time(lambda: rd.factor_of_safety(system), repeat)
-        row.update(fos_seconds=t_fos, fos=result.value, bracket=list(result.bracket))
+        n_fact = (system.factorizer.count - before) / repeat
+        # one numeric factorisation + solve of the same (elastic) matrix, pattern analysed
+        fz = Factorizer()
+        fz.factorize(system.K0)
+        t_one, _ = _median_time(lambda: fz.factorize(system.K0).solve(system.f_ext), 5)
+        row.update(
+            fos_seconds=t_fos,
+            fos=result.value,
+            bracket=list(result.bracket),
+            factorisations=n_fact,
+            one_factorisation=t_one,
+            ratio=t_fos / t_one,
+            proof=result.proof,
+            backend=backend(system.assembly.n_dof),
+        )
     row["peak_mb"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     return row
 
@@ -102,8 +119,11 @@ def main() -> None:
             flush=True,
         )
     print()
-    print("| brick slope blocks | dof | build s | analyse s | FS s | FS | peak MB |")
-    print("|---|---|---|---|---|---|---|")
+    print(
+        "| brick slope blocks | dof | build s | analyse s | FS s | FS | proof | "
+        "LU count | one LU s | FS / one LU | backend | peak MB |"
+    )
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|")
     rows = []
     for n in args.sizes:
         cmd = [
@@ -121,9 +141,15 @@ def main() -> None:
         rows.append(r)
         fos_s = f"{r['fos_seconds']:.2f}" if "fos_seconds" in r else "-"
         fos_v = f"{r['fos']:.4f}" if r.get("fos") else "-"
+        extra = (
+            f"{r['proof']} | {r['factorisations']:.0f} | {r['one_factorisation']:.4f} | "
+            f"{r['ratio']:.0f} | {r['backend']}"
+            if "ratio" in r
+            else "- | - | - | - | -"
+        )
         print(
             f"| {r['n']:,} | {r['dof']:,} | {r['build']:.2f} | {r['analyse']:.2f} | {fos_s} | "
-            f"{fos_v} | {r['peak_mb']:.0f} |",
+            f"{fos_v} | {extra} | {r['peak_mb']:.0f} |",
             flush=True,
         )
     for key in ("build", "analyse", "fos_seconds"):

@@ -18,7 +18,7 @@ import numpy as np
 from scipy.sparse import coo_array
 from scipy.sparse.csgraph import connected_components
 
-from .certificate import admissible_load
+from .certificate import Certificate, admissible_load
 from .linalg import factorize
 from .model import Model
 from .results import Analysis, Evidence, FactorOfSafety, Step, Trial, tabulate
@@ -106,29 +106,38 @@ def _evidence(sol: Solve) -> Evidence:
     )
 
 
-def _certified(system: System, ev: Evidence, state, load_factor: float, factor: float):
-    """``ev`` with the equilibrium LP's verdict on a failed solve at
-    (``load_factor``, ``factor``) with the strengths of ``state``."""
+def _certificate(system: System, state, load_factor: float, factor: float) -> Certificate:
+    """The equilibrium LP (rockdem.certificate), or a note that it was skipped."""
     n = system.springs.n_springs
     if n > CERTIFY_MAX_SPRINGS:
-        text = f"equilibrium LP not solved ({n:,} spring points > {CERTIFY_MAX_SPRINGS:,})"
-        return replace(ev, certified=False, certificate=text)
-    cert = admissible_load(system, state, load_factor, factor)
+        text = f"not solved ({n:,} spring points > {CERTIFY_MAX_SPRINGS:,})"
+        return Certificate(load_factor, factor, None, text)
+    return admissible_load(system, state, load_factor, factor)
+
+
+def _certified(system: System, ev: Evidence, state, load_factor, factor, cert=None):
+    """``ev`` with the equilibrium LP's verdict on a failed solve at
+    (``load_factor``, ``factor``) with the strengths of ``state``."""
+    if cert is None or cert.strength_factor != factor:
+        cert = _certificate(system, state, load_factor, factor)
     return replace(ev, certified=cert.proves_failure, certificate=str(cert))
 
 
 def _load_step(system, state, q, lam_prev, lam, factor, stage):
     """Settle the load at ``lam`` from equilibrium at ``lam_prev``; where the
-    whole increment fails, retry it in smaller sub-steps (halving, down to
-    1/MAX_SUBSTEPS of it), committing the state after each.
+    whole increment fails and the equilibrium LP does not prove the load
+    beyond every admissible force field, retry it in smaller sub-steps
+    (halving, down to 1/MAX_SUBSTEPS of it), committing the state after each.
 
     A Newton failure on a large increment is not yet a verdict: with brittle
     strength the state jumps at each commit, and smaller increments follow
-    the loading path.  Returns ``(solve, state, q, lam_reached)``.
+    the loading path.  Returns ``(solve, state, q, lam_reached, certificate)``
+    (the certificate of the load ``lam`` when it was computed, else None).
     """
     full = lam - lam_prev
     inc = full
     iterations, history = 0, []
+    cert = None
     while True:
         target = min(lam, lam_prev + inc)
         q0 = q * (target / lam_prev) if lam_prev > 0 else q
@@ -140,11 +149,15 @@ def _load_step(system, state, q, lam_prev, lam, factor, stage):
             if lam_prev >= lam * (1 - 1e-12):
                 break
             continue
+        if cert is None:
+            cert = _certificate(system, state, 1.0, factor)
+            if cert.proves_failure and cert.mu < lam:
+                break  # proven: no sub-step can carry this load
         if inc <= full / MAX_SUBSTEPS * (1 + 1e-9):
             break
         inc *= 0.5
     sol = replace(sol, iterations=iterations, residuals=history)
-    return sol, state, q, lam_prev
+    return sol, state, q, lam_prev, cert
 
 
 def _mechanism(system: System, sol: Solve, state, load_factor, factor):
@@ -295,10 +308,12 @@ def analyse(
     sol = None
     for k in range(1, n_steps + 1):
         lam = k / n_steps
-        sol, state, q, lam_prev = _load_step(system, state, q, lam_prev, lam, strength_factor, k)
+        sol, state, q, lam_prev, cert = _load_step(
+            system, state, q, lam_prev, lam, strength_factor, k
+        )
         ev = _evidence(sol)
-        if not sol.converged:
-            ev = _certified(system, ev, state, lam, strength_factor)
+        if not sol.converged:  # is the full load beyond every admissible force field?
+            ev = _certified(system, ev, state, 1.0, strength_factor, cert)
         n_failed = int((state.yielded | state.broken).sum())
         steps.append(Step(k, lam, strength_factor, sol.converged, ev, n_failed))
         if progress is not None:
@@ -440,9 +455,25 @@ def factor_of_safety(
             if b.stable:
                 lo_an = b
     lo, hi = lo_an.strength_factor, hi_F
+    if hi_an is not None and hi_an.evidence.certified is None:
+        hi_an, trials = _prove(system, hi_an, lo_an.state, hi, trials)
     return FactorOfSafety(
         0.5 * (lo + hi), (lo, hi), "strength", tuple(trials), lo_an, hi_an, _DEFINITION
     )
+
+
+def _prove(system: System, failed: Analysis, state, factor: float, trials: list[Trial]):
+    """The failed trial with the equilibrium LP's verdict at ``factor`` (the
+    strengths of ``state``, the last stable trial's flags), and the trial list
+    with that trial's evidence updated."""
+    last = failed.steps[-1]
+    ev = _certified(system, last.evidence, state, 1.0, factor)
+    failed = replace(failed, steps=(*failed.steps[:-1], replace(last, evidence=ev)))
+    trials = [
+        replace(t, evidence=ev) if t.factor == failed.strength_factor and not t.stable else t
+        for t in trials
+    ]
+    return failed, trials
 
 
 _DEFINITION = (
@@ -466,8 +497,6 @@ def _continue(system: System, base: Analysis, factor: float, stage: int, q0=None
         system, start, q0, lam, factor, stage, base.strength_factor, True, resolution
     )
     ev = _evidence(sol)
-    if not sol.converged:
-        ev = _certified(system, ev, start, lam, min(factor, sol.failed_at or factor))
     n_failed = int((state.yielded | state.broken).sum())
     step = Step(stage, lam, factor, sol.converged, ev, n_failed)
     steps = (*base.steps, step)

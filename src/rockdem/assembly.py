@@ -11,6 +11,7 @@ are refilled with one ``bincount`` per iteration.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 import scipy.sparse as sp
@@ -68,7 +69,11 @@ class Assembly:
 
     def internal_force(self, force: np.ndarray) -> np.ndarray:
         """``sum_k w_k B_k^T p_k`` for generalised forces ``p`` (n_springs, 2)."""
-        return self.operator.T @ (force * self.weight[:, None]).ravel()
+        return self._operator_t @ (force * self.weight[:, None]).ravel()
+
+    @cached_property
+    def _operator_t(self) -> sp.csr_array:
+        return sp.csr_array(self.operator.T)
 
     def stiffness(self, d_nn, d_sn, d_ss, shift: float = 0.0, base=None) -> sp.csc_array:
         """Tangent ``sum w B^T D B`` (+ ``shift * base``) on the fixed pattern.

@@ -186,10 +186,12 @@ def analysis_summary(analysis) -> dict[str, Any]:
                     "converged": s.converged,
                     "failed_springs": s.n_failed_springs,
                     "evidence": str(s.evidence),
+                    "proof": s.evidence.proof,
                 }
                 for s in analysis.steps
             ],
             "evidence": str(analysis.evidence),
+            "proof": analysis.evidence.proof,
         }
     )
 
@@ -207,10 +209,17 @@ def fos_summary(fos) -> dict[str, Any]:
             "factor_of_safety": fos.value,
             "bracket": list(fos.bracket),
             "mode": fos.mode,
+            "proof": fos.proof,
+            "certified_upper_bound": fos.certified_upper_bound,
             "definition": fos.definition,
             "mechanism_blocks": [] if failed is None else [int(i) for i in failed.unstable_blocks],
             "trials": [
-                {"factor": t.factor, "stable": t.stable, "evidence": str(t.evidence)}
+                {
+                    "factor": t.factor,
+                    "stable": t.stable,
+                    "evidence": str(t.evidence),
+                    "proof": t.evidence.proof,
+                }
                 for t in fos.trials
             ],
         }

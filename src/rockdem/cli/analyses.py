@@ -76,6 +76,15 @@ def _write(folder: Path, analysis, document: dict[str, Any], overwrite: bool, qu
         err.print(f"results written to {escape(str(folder))}/ ({', '.join(f.name for f in files)})")
 
 
+_PROOF = {
+    "lp-certificate": "proven: no statically admissible force field carries the loads "
+    "(equilibrium LP)",
+    "undecided": "[yellow]undecided[/yellow]: the solver found no equilibrium, but an "
+    "admissible force field exists; failure is not proven (the factor may be higher)",
+    None: "none needed (equilibrium found)",
+}
+
+
 def _print_run(doc: dict[str, Any], result) -> None:
     out.print(f"[bold]{escape(doc['model_name'])}[/bold]  ({escape(doc['model_file'])})")
     n = len(result.steps)
@@ -90,6 +99,7 @@ def _print_run(doc: dict[str, Any], result) -> None:
             f"(last equilibrium at load factor {doc['load_factor']:.3g}); "
             f"{escape(doc['evidence'])}"
         )
+        out.print(f"proof: {_PROOF[doc['proof']]}")
     blocks = doc["unstable_blocks"]
     out.print(f"unstable blocks ({len(blocks)}): " + (_ids(blocks) if blocks else "none"))
     failed = doc["failed_interfaces"]
@@ -168,6 +178,9 @@ def _print_fos(doc: dict[str, Any]) -> None:
     if doc["factor_of_safety"] is not None:
         out.print(f"factor of safety: [bold]{doc['factor_of_safety']:.4f}[/bold]")
         out.print(f"bracket: stable at {lo:.4f}, unstable at {hi:.4f} ({n} trials)")
+        out.print(f"unstable end: {_PROOF[doc['proof']]}")
+        if doc.get("certified_upper_bound") is not None:
+            out.print(f"rigorous upper bound (equilibrium LP): {doc['certified_upper_bound']:.4f}")
     elif doc["mode"] == "no-failure":
         out.print(
             f"factor of safety: > {lo:.4g} (no failure up to the largest factor tried, {n} trials)"

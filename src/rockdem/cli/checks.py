@@ -8,6 +8,7 @@ from typing import Any
 from rich.markup import escape
 from rich.table import Table
 
+from ..linalg import backend
 from .common import (
     DebugOpt,
     ExampleOpt,
@@ -68,6 +69,7 @@ def _check_summary(path: Path, m, cfg, system) -> dict[str, Any]:
         "interfaces": {"total": faces.n_interfaces, "by_kind": kinds},
         "springs": system.springs.n_springs,
         "degrees_of_freedom": system.assembly.n_dof,
+        "linear_solver": backend(system.assembly.n_dof),
         "loads": {
             "gravity": loads.gravity,
             "seismic_h": loads.seismic_h,
@@ -98,7 +100,10 @@ def _print_check(s: dict[str, Any]) -> None:
     table = Table("interface kind", "count", "total length", box=None, pad_edge=False)
     for kind, row in s["interfaces"]["by_kind"].items():
         table.add_row(escape(kind), str(row["count"]), f"{row['length']:.6g}")
-    out.print(f"interfaces: {s['interfaces']['total']} ({s['springs']} spring points)")
+    out.print(
+        f"interfaces: {s['interfaces']['total']} ({s['springs']} spring points); "
+        f"{s['degrees_of_freedom']} unknowns, factorised with {s['linear_solver']}"
+    )
     out.print(table)
     ld = s["loads"]
     out.print(
