@@ -108,3 +108,31 @@ def test_cohesionless_staged_analysis_does_not_depend_on_load_steps():
         for n in (1, 4)
     ]
     assert abs(fs[0] / fs[1] - 1) < 0.005, fs
+
+
+def _family(seed):
+    rng = np.random.default_rng(seed)
+    dip = float(rng.uniform(20, 32))
+    phi = float(dip + rng.uniform(5, 12))
+    model = V.bedding_slope(
+        height=float(rng.uniform(8, 16)),
+        face_angle=float(rng.uniform(55, 70)),
+        bedding_dip=dip,
+        bedding_spacing=float(rng.uniform(0.8, 1.2)),
+        cross_spacing=float(rng.uniform(1.3, 2.0)),
+        behind=12.0,
+        friction_angle=phi,
+    )
+    return model, dip, phi
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("seed", range(8))
+def test_generated_bedded_slopes_match_planar_sliding(seed):
+    """Seeded random slopes: c = 0 bedding daylighting in a steeper face, vertical
+    cross joints too widely spaced to topple: FS = tan(phi)/tan(dip) within 1%
+    (Hoek & Bray planar sliding)."""
+    model, dip, phi = _family(seed)
+    exact = np.tan(np.radians(phi)) / np.tan(np.radians(dip))
+    fos = rd.factor_of_safety(model)
+    assert fos.value == pytest.approx(exact, rel=0.01), (dip, phi, fos)

@@ -99,4 +99,4 @@ def admissible_load(system, state: SpringState, load_factor: float, factor: floa
     )
     if res.status != 0:
         return Certificate(load_factor, factor, None, res.message)
-    return Certificate(load_factor, factor, float(res.x[-1]), "optimal")
+    return Certificate(load_factor, factor, max(float(res.x[-1]), 0.0), "optimal")
