@@ -136,3 +136,28 @@ def test_generated_bedded_slopes_match_planar_sliding(seed):
     exact = np.tan(np.radians(phi)) / np.tan(np.radians(dip))
     fos = rd.factor_of_safety(model)
     assert fos.value == pytest.approx(exact, rel=0.01), (dip, phi, fos)
+
+
+@pytest.mark.parametrize("units", [1.0, 1000.0])
+def test_lp_certificate_with_cohesion_in_any_units(units):
+    """Hoek & Bray: FS = (c L + W cos d tan phi) / (W sin d); the LP brackets it
+    within 0.5% whether forces are in kN or N (cohesion and weight scaled alike)."""
+    dip, phi, c = 35.0, 25.0, 4.0 * units
+    joint = rd.Joint(normal_stiffness=1e6 * units, friction_angle=phi, cohesion=c)
+    model = V.block_on_plane(dip, joint, unit_weight=25.0 * units)
+    W, L = 25.0 * units * 2.0 * 1.0, 2.0
+    exact = V.sliding_fos(dip, phi, cohesion=c, length=L, weight=W)
+    assert _lp(model, exact * 1.005).proves_failure
+    assert not _lp(model, exact * 0.995).proves_failure
+
+
+def test_lp_in_a_region_still_proves_failure():
+    """Keeping only the moving blocks' equations relaxes the LP: the wedge's
+    failure (seed paper Eq. 7) is still proven on the two blocks alone."""
+    model = V.two_block_wedge(35, 30)
+    system = rd.build_system(model)
+    state = SpringState.initial(system.springs.n_springs)
+    region = ~system.blocks.fixed
+    exact = V.wedge_fos(200, 75, 37, 27, 35, 30, 35)
+    assert admissible_load(system, state, 1.0, exact * 1.003, region=region).proves_failure
+    assert not admissible_load(system, state, 1.0, exact * 0.997, region=region).proves_failure

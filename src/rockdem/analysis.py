@@ -106,13 +106,21 @@ def _evidence(sol: Solve) -> Evidence:
     )
 
 
-def _certificate(system: System, state, load_factor: float, factor: float) -> Certificate:
-    """The equilibrium LP (rockdem.certificate), or a note that it was skipped."""
+def _certificate(system: System, state, load_factor, factor, region=None) -> Certificate:
+    """The equilibrium LP (rockdem.certificate), or a note that it was skipped.
+
+    ``region``: only these blocks' equations (a relaxation that still proves
+    failure), used when the whole model is too large for the LP.
+    """
     n = system.springs.n_springs
+    if region is not None:
+        faces = system.interfaces
+        touch = region[faces.block_a] | region[faces.block_b]
+        n = int(touch[system.springs.interface].sum())
     if n > CERTIFY_MAX_SPRINGS:
         text = f"not solved ({n:,} spring points > {CERTIFY_MAX_SPRINGS:,})"
         return Certificate(load_factor, factor, None, text)
-    return admissible_load(system, state, load_factor, factor)
+    return admissible_load(system, state, load_factor, factor, region)
 
 
 def _certified(system: System, ev: Evidence, state, load_factor, factor, cert=None):
@@ -121,6 +129,24 @@ def _certified(system: System, ev: Evidence, state, load_factor, factor, cert=No
     if cert is None or cert.strength_factor != factor:
         cert = _certificate(system, state, load_factor, factor)
     return replace(ev, certified=cert.proves_failure, certificate=str(cert))
+
+
+def _prove_in_region(system: System, failed: Analysis, state, factor: float) -> Analysis:
+    """A failure the whole-model LP could not check (too large): the LP on
+    the moving blocks alone, which proves failure for the whole model too."""
+    ev = failed.evidence
+    if ev.certified or not failed.unstable_blocks.size:
+        return failed
+    if system.springs.n_springs <= CERTIFY_MAX_SPRINGS:
+        return failed  # the whole-model LP was solved: a region cannot prove more
+    region = np.zeros(system.blocks.n_blocks, dtype=bool)
+    region[np.isin(system.blocks.ids, failed.unstable_blocks)] = True
+    cert = _certificate(system, state, 1.0, factor, region)
+    if not cert.proves_failure:
+        return failed
+    text = f"{cert} (on the {int(region.sum()):,} moving blocks)"
+    ev = replace(ev, certified=True, certificate=text)
+    return replace(failed, steps=(*failed.steps[:-1], replace(failed.steps[-1], evidence=ev)))
 
 
 def _load_step(system, state, q, lam_prev, lam, factor, stage):
@@ -320,7 +346,8 @@ def analyse(
             progress(k, n_steps)
         if not sol.converged:
             log.info("load step %d/%d: no equilibrium (%s)", k, n_steps, ev)
-            return _package(system, sol, state, lam_prev, strength_factor, False, steps, q)
+            failed = _package(system, sol, state, lam_prev, strength_factor, False, steps, q)
+            return _prove_in_region(system, failed, state, strength_factor)
     return _package(system, sol, state, lam_prev, strength_factor, True, steps, q)
 
 
@@ -469,6 +496,8 @@ def _prove(system: System, failed: Analysis, state, factor: float, trials: list[
     last = failed.steps[-1]
     ev = _certified(system, last.evidence, state, 1.0, factor)
     failed = replace(failed, steps=(*failed.steps[:-1], replace(last, evidence=ev)))
+    failed = _prove_in_region(system, failed, state, factor)
+    ev = failed.evidence
     trials = [
         replace(t, evidence=ev) if t.factor == failed.strength_factor and not t.stable else t
         for t in trials
