@@ -18,7 +18,7 @@ import numpy as np
 from scipy.sparse import coo_array
 from scipy.sparse.csgraph import connected_components
 
-from .certificate import Certificate, admissible_load
+from .certificate import certificate_for, prove_failed_trial, prove_in_region, with_certificate
 from .linalg import factorize
 from .model import Model
 from .results import Analysis, Evidence, FactorOfSafety, Step, Trial, tabulate
@@ -35,9 +35,6 @@ MECHANISM_SHARE = 0.01
 HOLD_MARGIN = 1.01
 #: a failed load step is retried in up to this many equal sub-steps (halving)
 MAX_SUBSTEPS = 8
-#: the equilibrium LP is solved for models up to this many spring points
-#: (HiGHS interior point: 2.3 s at 2,769 springs, 26 s at 9,200: faster than linear)
-CERTIFY_MAX_SPRINGS = 4_000
 
 
 def _settle(
@@ -106,49 +103,6 @@ def _evidence(sol: Solve) -> Evidence:
     )
 
 
-def _certificate(system: System, state, load_factor, factor, region=None) -> Certificate:
-    """The equilibrium LP (rockdem.certificate), or a note that it was skipped.
-
-    ``region``: only these blocks' equations (a relaxation that still proves
-    failure), used when the whole model is too large for the LP.
-    """
-    n = system.springs.n_springs
-    if region is not None:
-        faces = system.interfaces
-        touch = region[faces.block_a] | region[faces.block_b]
-        n = int(touch[system.springs.interface].sum())
-    if n > CERTIFY_MAX_SPRINGS:
-        text = f"not solved ({n:,} spring points > {CERTIFY_MAX_SPRINGS:,})"
-        return Certificate(load_factor, factor, None, text)
-    return admissible_load(system, state, load_factor, factor, region)
-
-
-def _certified(system: System, ev: Evidence, state, load_factor, factor, cert=None):
-    """``ev`` with the equilibrium LP's verdict on a failed solve at
-    (``load_factor``, ``factor``) with the strengths of ``state``."""
-    if cert is None or cert.strength_factor != factor:
-        cert = _certificate(system, state, load_factor, factor)
-    return replace(ev, certified=cert.proves_failure, certificate=str(cert))
-
-
-def _prove_in_region(system: System, failed: Analysis, state, factor: float) -> Analysis:
-    """A failure the whole-model LP could not check (too large): the LP on
-    the moving blocks alone, which proves failure for the whole model too."""
-    ev = failed.evidence
-    if ev.certified or not failed.unstable_blocks.size:
-        return failed
-    if system.springs.n_springs <= CERTIFY_MAX_SPRINGS:
-        return failed  # the whole-model LP was solved: a region cannot prove more
-    region = np.zeros(system.blocks.n_blocks, dtype=bool)
-    region[np.isin(system.blocks.ids, failed.unstable_blocks)] = True
-    cert = _certificate(system, state, 1.0, factor, region)
-    if not cert.proves_failure:
-        return failed
-    text = f"{cert} (on the {int(region.sum()):,} moving blocks)"
-    ev = replace(ev, certified=True, certificate=text)
-    return replace(failed, steps=(*failed.steps[:-1], replace(failed.steps[-1], evidence=ev)))
-
-
 def _load_step(system, state, q, lam_prev, lam, factor, stage):
     """Settle the load at ``lam`` from equilibrium at ``lam_prev``; where the
     whole increment fails and the equilibrium LP does not prove the load
@@ -176,7 +130,7 @@ def _load_step(system, state, q, lam_prev, lam, factor, stage):
                 break
             continue
         if cert is None:
-            cert = _certificate(system, state, 1.0, factor)
+            cert = certificate_for(system, state, 1.0, factor)
             if cert.proves_failure and cert.mu < lam:
                 break  # proven: no sub-step can carry this load
         if inc <= full / MAX_SUBSTEPS * (1 + 1e-9):
@@ -339,7 +293,7 @@ def analyse(
         )
         ev = _evidence(sol)
         if not sol.converged:  # is the full load beyond every admissible force field?
-            ev = _certified(system, ev, state, 1.0, strength_factor, cert)
+            ev = with_certificate(system, ev, state, 1.0, strength_factor, cert)
         n_failed = int((state.yielded | state.broken).sum())
         steps.append(Step(k, lam, strength_factor, sol.converged, ev, n_failed))
         if progress is not None:
@@ -347,7 +301,7 @@ def analyse(
         if not sol.converged:
             log.info("load step %d/%d: no equilibrium (%s)", k, n_steps, ev)
             failed = _package(system, sol, state, lam_prev, strength_factor, False, steps, q)
-            return _prove_in_region(system, failed, state, strength_factor)
+            return prove_in_region(system, failed, state, strength_factor)
     return _package(system, sol, state, lam_prev, strength_factor, True, steps, q)
 
 
@@ -483,26 +437,10 @@ def factor_of_safety(
                 lo_an = b
     lo, hi = lo_an.strength_factor, hi_F
     if hi_an is not None and hi_an.evidence.certified is None:
-        hi_an, trials = _prove(system, hi_an, lo_an.state, hi, trials)
+        hi_an, trials = prove_failed_trial(system, hi_an, lo_an.state, hi, trials)
     return FactorOfSafety(
         0.5 * (lo + hi), (lo, hi), "strength", tuple(trials), lo_an, hi_an, _DEFINITION
     )
-
-
-def _prove(system: System, failed: Analysis, state, factor: float, trials: list[Trial]):
-    """The failed trial with the equilibrium LP's verdict at ``factor`` (the
-    strengths of ``state``, the last stable trial's flags), and the trial list
-    with that trial's evidence updated."""
-    last = failed.steps[-1]
-    ev = _certified(system, last.evidence, state, 1.0, factor)
-    failed = replace(failed, steps=(*failed.steps[:-1], replace(last, evidence=ev)))
-    failed = _prove_in_region(system, failed, state, factor)
-    ev = failed.evidence
-    trials = [
-        replace(t, evidence=ev) if t.factor == failed.strength_factor and not t.stable else t
-        for t in trials
-    ]
-    return failed, trials
 
 
 _DEFINITION = (

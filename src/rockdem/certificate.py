@@ -17,7 +17,7 @@ confirms failures.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 import scipy.sparse as sp
@@ -29,6 +29,9 @@ from .spring_law import SpringState, strength
 MU_CAP = 2.0
 #: certified when the admissible multiple falls short of the load by this share
 MARGIN = 1e-6
+#: the equilibrium LP is solved for models up to this many spring points
+#: (HiGHS interior point: 2.3 s at 2,769 springs, 26 s at 9,200: faster than linear)
+CERTIFY_MAX_SPRINGS = 4_000
 
 
 @dataclass(frozen=True)
@@ -124,3 +127,63 @@ def admissible_load(
     if res.status != 0:
         return Certificate(load_factor, factor, None, res.message)
     return Certificate(load_factor, factor, max(float(res.x[-1]), 0.0), "optimal")
+
+
+# ------------------------------------------------ proofs attached to results
+def certificate_for(system, state, load_factor, factor, region=None) -> Certificate:
+    """The equilibrium LP (rockdem.certificate), or a note that it was skipped.
+
+    ``region``: only these blocks' equations (a relaxation that still proves
+    failure), used when the whole model is too large for the LP.
+    """
+    n = system.springs.n_springs
+    if region is not None:
+        faces = system.interfaces
+        touch = region[faces.block_a] | region[faces.block_b]
+        n = int(touch[system.springs.interface].sum())
+    if n > CERTIFY_MAX_SPRINGS:
+        text = f"not solved ({n:,} spring points > {CERTIFY_MAX_SPRINGS:,})"
+        return Certificate(load_factor, factor, None, text)
+    return admissible_load(system, state, load_factor, factor, region)
+
+
+def with_certificate(system, ev, state, load_factor, factor, cert=None):
+    """``ev`` with the equilibrium LP's verdict on a failed solve at
+    (``load_factor``, ``factor``) with the strengths of ``state``."""
+    if cert is None or cert.strength_factor != factor:
+        cert = certificate_for(system, state, load_factor, factor)
+    return replace(ev, certified=cert.proves_failure, certificate=str(cert))
+
+
+def prove_in_region(system, failed, state, factor: float):
+    """A failure the whole-model LP could not check (too large): the LP on
+    the moving blocks alone, which proves failure for the whole model too."""
+    ev = failed.evidence
+    if ev.certified or not failed.unstable_blocks.size:
+        return failed
+    if system.springs.n_springs <= CERTIFY_MAX_SPRINGS:
+        return failed  # the whole-model LP was solved: a region cannot prove more
+    region = np.zeros(system.blocks.n_blocks, dtype=bool)
+    region[np.isin(system.blocks.ids, failed.unstable_blocks)] = True
+    cert = certificate_for(system, state, 1.0, factor, region)
+    if not cert.proves_failure:
+        return failed
+    text = f"{cert} (on the {int(region.sum()):,} moving blocks)"
+    ev = replace(ev, certified=True, certificate=text)
+    return replace(failed, steps=(*failed.steps[:-1], replace(failed.steps[-1], evidence=ev)))
+
+
+def prove_failed_trial(system, failed, state, factor: float, trials):
+    """The failed trial with the equilibrium LP's verdict at ``factor`` (the
+    strengths of ``state``, the last stable trial's flags), and the trial list
+    with that trial's evidence updated."""
+    last = failed.steps[-1]
+    ev = with_certificate(system, last.evidence, state, 1.0, factor)
+    failed = replace(failed, steps=(*failed.steps[:-1], replace(last, evidence=ev)))
+    failed = prove_in_region(system, failed, state, factor)
+    ev = failed.evidence
+    trials = [
+        replace(t, evidence=ev) if t.factor == failed.strength_factor and not t.stable else t
+        for t in trials
+    ]
+    return failed, trials
