@@ -152,7 +152,9 @@ def with_certificate(system, ev, state, load_factor, factor, cert=None):
     (``load_factor``, ``factor``) with the strengths of ``state``."""
     if cert is None or cert.strength_factor != factor:
         cert = certificate_for(system, state, load_factor, factor)
-    return replace(ev, certified=cert.proves_failure, certificate=str(cert))
+    return replace(
+        ev, certified=cert.proves_failure, certificate=str(cert), certified_at=cert.strength_factor
+    )
 
 
 def prove_in_region(system, failed, state, factor: float):
@@ -169,7 +171,7 @@ def prove_in_region(system, failed, state, factor: float):
     if not cert.proves_failure:
         return failed
     text = f"{cert} (on the {int(region.sum()):,} moving blocks)"
-    ev = replace(ev, certified=True, certificate=text)
+    ev = replace(ev, certified=True, certificate=text, certified_at=factor)
     return replace(failed, steps=(*failed.steps[:-1], replace(failed.steps[-1], evidence=ev)))
 
 

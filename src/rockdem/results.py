@@ -22,6 +22,8 @@ class Evidence:
     failed_at: float | None = None  # ... and the factor just beyond it that failed
     #: the equilibrium LP's statement (rockdem.certificate), when it was solved
     certificate: str | None = None
+    #: the strength factor at which the LP was solved
+    certified_at: float | None = None
 
     @property
     def proof(self) -> str | None:
@@ -226,9 +228,9 @@ class FactorOfSafety:
         """Smallest factor at which the equilibrium LP proved that no
         admissible force field exists (a rigorous upper bound), or None."""
         bounds = [
-            min(t.factor, t.evidence.failed_at or t.factor)
+            t.evidence.certified_at
             for t in self.trials
-            if not t.stable and t.evidence.certified
+            if not t.stable and t.evidence.certified and t.evidence.certified_at is not None
         ]
         return min(bounds) if bounds else None
 
