@@ -126,7 +126,7 @@ def admissible_load(
     )
     if res.status != 0:
         return Certificate(load_factor, factor, None, res.message)
-    return Certificate(load_factor, factor, max(float(res.x[-1]), 0.0), "optimal")
+    return Certificate(load_factor, factor, max(float(res.x[-1]), 0.0) + 0.0, "optimal")
 
 
 # ------------------------------------------------ proofs attached to results
