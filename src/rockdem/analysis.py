@@ -407,6 +407,10 @@ def factor_of_safety(
     #    factor just beyond that failed: both narrow the bracket at once.
     stage = max(step.stage for step in lo_an.steps)  # trials follow the load steps
     hi_F = hi_an.strength_factor if hi_an is not None else np.inf
+    if hi_an is not None and hi_an.evidence.proof != "lp-certificate":
+        # a staged analysis that stalled without proof bounds nothing: the
+        # continuation from the stable state decides (and may pass it)
+        hi_an, hi_F = None, np.inf
     while hi_F - lo_an.strength_factor > width:
         if hi_an is None:
             F = lo_an.strength_factor * grow

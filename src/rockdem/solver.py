@@ -50,6 +50,9 @@ RELEASE_RATIO = 0.3
 #: a Newton solve has stalled when the residual fell less than x STALL_RATIO
 #: over the last STALL_WINDOW accepted steps
 STALL_WINDOW = 6
+#: ... while exploring the strength homotopy, away from a confirmed limit: fail fast
+EXPLORE_STALL_WINDOW = 6
+PREDICT = False
 STALL_RATIO = 0.5
 #: Newton iterations tried from scratch before releasing fictitious strength
 DIRECT_FROM_SCRATCH = 20
@@ -157,7 +160,7 @@ def _lu(system, J):
         return None
 
 
-def _newton(system, state, load_factor, factor, q, max_it):
+def _newton(system, state, load_factor, factor, q, max_it, stall_window=STALL_WINDOW):
     """Semismooth Newton with an adaptive Levenberg-Marquardt shift and a
     backtracking line search on the scaled out-of-balance force.
 
@@ -202,7 +205,7 @@ def _newton(system, state, load_factor, factor, q, max_it):
             history.append(merit)
             if alpha == 1.0:
                 beta = max(beta / 10.0, BETA_START)
-            if len(history) > STALL_WINDOW and merit > STALL_RATIO * history[-1 - STALL_WINDOW]:
+            if len(history) > stall_window and merit > STALL_RATIO * history[-1 - stall_window]:
                 return Solve(False, q, resp, it, history, "stalled", direction)
         else:
             beta *= 10.0
@@ -339,29 +342,43 @@ def solve_equilibrium(
             return Solve(
                 False, start.q, start.response, total, history, "no start", start.direction
             )
+    return _strength_homotopy(
+        system,
+        state,
+        load_factor,
+        target,
+        F_ok,
+        q_ok,
+        # the direct attempt at the target failed from q0: the first bracket
+        (target, abs(target - F_ok)) if F_ok == base_factor else None,
+        resolution if resolution is not None else HOMOTOPY_MIN_STEP * abs(target),
+        max_it,
+        (total, history, sol),
+    )
+
+
+def _strength_homotopy(system, state, lam, target, F_ok, q_ok, bad, smallest, max_it, so_far):
+    """Reduce the strength from ``F_ok`` (in equilibrium at ``q_ok``) to ``target``.
+
+    A bracket search on the strength factor: the step grows x1.5 after a
+    success and never reaches the smallest factor that failed (``bad``: the
+    factor and the distance from which it was tried), so near the limit the
+    search is a bisection.  Each solve starts from the secant predictor
+    through the last two equilibria.  A failure is only taken as the limit
+    once it is confirmed from an equilibrium within ``smallest`` of it; a
+    failure from farther away that later converges is forgotten.
+    """
+    total, history, last = so_far
+    prev = None  # (F, q) of the equilibrium before F_ok, for the predictor
     step = target - F_ok
-    if F_ok == base_factor:  # the direct attempt already failed at the target
+    if bad is not None:
         step *= 0.5
-    smallest = resolution if resolution is not None else HOMOTOPY_MIN_STEP * abs(target)
-    last = sol
+    if step == 0:  # re-solving at the equilibrium's own factor: one more fresh attempt
+        bad = (target, np.inf)
     while True:
         F_try = F_ok + step
-        trial = _newton(system, state, load_factor, F_try, q_ok, min(max_it, HOMOTOPY_ITERATIONS))
-        total += trial.iterations
-        history += trial.residuals
-        if trial.converged:
-            if F_try == target:
-                return Solve(
-                    True, trial.q, trial.response, total, history, "converged", trial.direction
-                )
-            F_ok, q_ok = F_try, trial.q
-            step = 1.5 * step
-            if (target - F_ok) * (target - F_ok - step) <= 0:  # do not overshoot
-                step = target - F_ok
-        else:
-            last = trial
-            step = 0.5 * step
-            if abs(step) < smallest:
+        if bad is not None and abs(bad[0] - F_ok) < smallest:
+            if bad[1] <= smallest * (1 + 1e-9):  # confirmed from close by: the limit
                 reason = f"no equilibrium beyond strength factor {F_ok:.6g} ({last.reason})"
                 return Solve(
                     False,
@@ -373,5 +390,34 @@ def solve_equilibrium(
                     last.direction,
                     F_ok,
                     q_ok,
-                    F_try,
+                    bad[0],
                 )
+            F_try = bad[0]  # tried from afar: try again from here
+        elif bad is not None and (F_try - bad[0]) * step >= 0:  # never past a failure
+            F_try = 0.5 * (F_ok + bad[0])
+        q_start = q_ok
+        if PREDICT and prev is not None and F_ok != prev[0]:
+            q_start = q_ok + (F_try - F_ok) / (F_ok - prev[0]) * (q_ok - prev[1])
+        confirming = abs(F_try - F_ok) <= smallest * (1 + 1e-9)
+        window = STALL_WINDOW if confirming else EXPLORE_STALL_WINDOW
+        trial = _newton(
+            system, state, lam, F_try, q_start, min(max_it, HOMOTOPY_ITERATIONS), window
+        )
+        total += trial.iterations
+        history += trial.residuals
+        if trial.converged:
+            if F_try == target:
+                return Solve(
+                    True, trial.q, trial.response, total, history, "converged", trial.direction
+                )
+            distance = abs(F_try - F_ok)
+            prev, F_ok, q_ok = (F_ok, q_ok), F_try, trial.q
+            if bad is not None and F_try == bad[0]:  # a failure from afar was not the limit
+                bad, step = None, 0.5 * bad[1]
+            step = np.sign(target - F_ok) * max(1.5 * abs(step), distance)
+            if (target - F_ok) * (target - F_ok - step) <= 0:  # do not overshoot
+                step = target - F_ok
+        else:
+            last = trial
+            bad = (F_try, abs(F_try - F_ok))
+            step = 0.5 * (F_try - F_ok)
