@@ -56,6 +56,26 @@ def test_translating_coordinates(reference):
     assert unstable == reference[1] and failed == reference[2]
 
 
+@pytest.mark.parametrize("shift", [(1e5, -3e4), (5e5, 7e6)])  # mine grid, UTM northing
+def test_site_coordinates_keep_every_interface(reference, shift):
+    """A closing vertex is dropped only within a tolerance relative to the
+    model's size: far from the origin no vertex may merge, no interface vanish."""
+    fos, unstable, failed = _summary(_model(shift=shift))
+    assert fos.failed_analysis.interfaces.n_interfaces == (
+        reference[0].failed_analysis.interfaces.n_interfaces
+    )
+    assert fos.value == pytest.approx(reference[0].value, rel=1e-6)
+    assert unstable == reference[1] and failed == reference[2]
+
+
+def test_small_blocks_far_from_the_origin_keep_their_vertices():
+    """Two 0.5 x 0.25 blocks at (1e5, -3e4): four vertices and full area each."""
+    square = np.array([(0, 0), (0.5, 0), (0.5, 0.25), (0, 0.25)]) + np.array([1e5, -3e4])
+    b = rd.Blocks.from_polygons([square, square + np.array([0.5, 0.0])])
+    assert np.diff(b.offsets).tolist() == [4, 4]
+    assert b.area == pytest.approx([0.125, 0.125], rel=1e-9)
+
+
 def test_scaling_lengths_by_ten(reference):
     fos, unstable, failed = _summary(_model(scale=10.0, kn=1e6 / 10.0))
     assert fos.value == pytest.approx(reference[0].value, rel=1e-6)

@@ -233,8 +233,8 @@ def _as_vertices(poly, i: int) -> np.ndarray:
         raise InputError(f"block {i}", "needs at least 3 (x, y) vertices", "give a polygon")
     if not np.isfinite(xy).all():
         raise InputError(f"block {i}", "has a coordinate that is not finite", "fix the vertex")
-    if len(xy) > 3 and np.allclose(xy[0], xy[-1]):
-        xy = xy[:-1]
+    # a closing vertex equal to the first is dropped by _clean_ring, with a
+    # tolerance relative to the model's size (never to the coordinates' size)
     return xy.astype(float)
 
 
