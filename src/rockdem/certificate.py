@@ -184,8 +184,7 @@ def prove_failed_trial(system, failed, state, factor: float, trials):
     failed = replace(failed, steps=(*failed.steps[:-1], replace(last, evidence=ev)))
     failed = prove_in_region(system, failed, state, factor)
     ev = failed.evidence
-    trials = [
-        replace(t, evidence=ev) if t.factor == failed.strength_factor and not t.stable else t
-        for t in trials
-    ]
+    trials = list(trials)
+    last_failed = max(i for i, t in enumerate(trials) if not t.stable)
+    trials[last_failed] = replace(trials[last_failed], evidence=ev)
     return failed, trials
