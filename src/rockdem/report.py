@@ -260,10 +260,11 @@ def _inputs(model: Model, system, units: str | None) -> str:
 
 def _verdict(a: Analysis, fos: FactorOfSafety | None) -> str:
     cls = "stable" if a.stable else "unstable"
+    F = f"F = {a.strength_factor:.4g}"
     text = (
-        "STABLE under the full loads (F = 1)"
+        f"STABLE under the full loads ({F})"
         if a.stable
-        else f"UNSTABLE: no equilibrium beyond load factor {a.load_factor:.3g} (F = 1)"
+        else f"UNSTABLE: no equilibrium beyond load factor {a.load_factor:.3g} ({F})"
     )
     parts = [f'<div class="verdict {cls}" id="verdict">{_esc(text)}</div>']
     if fos is not None:
@@ -299,6 +300,31 @@ def _steps_table(a: Analysis) -> str:
         ["stage", "load factor", "F", "equilibrium", "failed springs", "evidence"],
         rows,
         cls="steps",
+    )
+
+
+def _failed_where(failed: Analysis, fos: FactorOfSafety) -> str:
+    """Where the failed state of a search sits, in words that match its numbers."""
+    F = failed.strength_factor
+    hi = fos.bracket[1]
+    if np.isfinite(hi) and F <= hi * (1 + 1e-9):
+        return f"F = {F:.4g}, just above the factor of safety"
+    if fos.value is None:
+        return f"F = {F:.4g}, the factor of the failed trial"
+    return (
+        f"F = {F:.4g}, the factor of the failed trial (the factor of safety is "
+        f"{fos.value:.3f}: equilibrium was lost at {hi:.4f} within this trial)"
+    )
+
+
+def _same_state(a: Analysis, b: Analysis) -> bool:
+    """Two failed analyses that would draw the same pictures."""
+    return (
+        not a.stable
+        and not b.stable
+        and a.strength_factor == b.strength_factor
+        and np.array_equal(a.unstable, b.unstable)
+        and np.allclose(a.mechanism, b.mechanism)
     )
 
 
@@ -401,52 +427,68 @@ def write_report(
             "fig-model",
         )
     )
+    F1 = f"F = {a.strength_factor:.4g}"
     pics.append(
         fig(
             plots.plot_failure(a, unit=unit).figure,
-            f"Failure state at F = 1: {_state_counts(a)}. Red: shear-yielded; blue: "
+            f"Failure state at {F1}: {_state_counts(a)}. Red: shear-yielded; blue: "
             "tension-failed; grey: elastic; purple band: slip surface; orange: unstable blocks.",
             "failure state",
             "fig-failure",
         )
     )
-    pics.append(
-        fig(
-            plots.plot_deformed(a, unit=unit).figure,
-            "Deformed shape at F = 1 (magnification in the title), blocks coloured by "
-            "displacement, arrows: magnified translation."
-            if a.stable
-            else "Failure mechanism at F = 1: direction of motion of the blocks (arbitrary scale).",
-            "deformed shape",
-            "fig-deformed",
-        )
-    )
-    if failed is not None and failed is not a:
+    if a.stable:
         pics.append(
             fig(
-                plots.plot_failure(failed, unit=unit).figure,
-                f"Failure state at F = {failed.strength_factor:.4g}, just above the factor of "
-                f"safety: {_state_counts(failed)}.",
-                "failure at the factor of safety",
+                plots.plot_deformed(a, unit=unit).figure,
+                f"Deformed shape at {F1} (magnification in the title), blocks coloured by "
+                "displacement, arrows: magnified translation.",
+                "deformed shape",
+                "fig-deformed",
+            )
+        )
+    else:  # no equilibrium, no deformed shape: the mechanism, titled as such
+        pics.append(
+            fig(
+                plots.plot_deformed(a, use="mechanism", unit=unit).figure,
+                f"Failure mechanism at {F1}: direction of motion of the blocks (arbitrary scale).",
+                "failure mechanism",
+                "fig-mechanism-run",
+            )
+        )
+    if failed is not None and failed is not a and not _same_state(a, failed):
+        where = _failed_where(failed, fos)
+        pics.append(
+            fig(
+                plots.plot_failure(fos, unit=unit).figure,
+                f"Failure state at {where}: {_state_counts(failed)}.",
+                "failure state of the factor-of-safety search",
                 "fig-failure-fos",
             )
         )
         pics.append(
             fig(
                 plots.plot_deformed(failed, use="mechanism", unit=unit).figure,
-                f"Failure mechanism at F = {failed.strength_factor:.4g}: how the blocks move.",
+                f"Failure mechanism at {where}: how the blocks move.",
                 "failure mechanism",
                 "fig-mechanism",
             )
         )
+    # stresses of an equilibrium: at F = 1 if stable, else the last one the search found
+    shown = a if a.stable or fos is None or fos.stable_analysis is None else fos.stable_analysis
     for k, j in enumerate(joints if joints is not None else [None]):
-        f = plots.plot_joint_stress(a, j, unit=unit, stress_unit=stress_unit)
+        f = plots.plot_joint_stress(shown, j, unit=unit, stress_unit=stress_unit)
         label = "the slip surface / failed joints" if j is None else f"joint {j}"
+        at = f"F = {shown.stress_factor:.4g}"
+        if shown is not a:
+            at += " (the last equilibrium of the strength-reduction search)"
+        elif not shown.stable:
+            at += " (no equilibrium: the solver's last iterate)"
         pics.append(
             fig(
                 f,
                 f"Normal stress (compression positive), shear stress and shear strength "
-                f"along {_esc(label)} at F = 1.",
+                f"along {_esc(label)} at {at}; the strength is drawn at the same factor.",
                 f"stress along {label}",
                 f"fig-stress-{k}",
             )
@@ -494,12 +536,12 @@ def write_report(
         '<h2 id="results">Verdict</h2>',
         _verdict(a, fos),
         '<h2 id="tables">Failed joints and unstable blocks</h2>',
-        "<h3>Failed joints at F = 1</h3>",
+        f"<h3>Failed joints at {F1}</h3>",
         _failed_table(a, stress_unit, max_rows),
-        "<h3>Unstable blocks at F = 1</h3>",
+        f"<h3>Unstable blocks at {F1}</h3>",
         _unstable_table(a, max_rows),
     ]
-    if failed is not None and failed is not a:
+    if failed is not None and failed is not a and not _same_state(a, failed):
         sections += [
             f"<h3>Failed joints at F = {failed.strength_factor:.4g} (failure)</h3>",
             _failed_table(failed, stress_unit, max_rows),

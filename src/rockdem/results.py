@@ -65,6 +65,10 @@ class SpringResults:
     capacity: np.ndarray
     state: np.ndarray
     first_failure: np.ndarray
+    #: shear strength at the strength factor and spring state the stresses
+    #: were evaluated with (``capacity`` is at full strength, F = 1); None in
+    #: results made before it was recorded
+    strength: np.ndarray | None = None
 
     @property
     def local_fos(self) -> np.ndarray:
@@ -157,6 +161,28 @@ class Analysis:
     @property
     def evidence(self) -> Evidence:
         return self.steps[-1].evidence
+
+    @property
+    def stress_factor(self) -> float:
+        """The strength factor at which ``springs`` (stresses, strength) were evaluated.
+
+        ``strength_factor`` for an equilibrium; for a failed solve, the factor
+        of its last iterate (``evidence.failed_at`` when the strength
+        homotopy ran: the stresses of a failed analysis are not at the
+        factor it was asked for).
+        """
+        if not self.stable and self.evidence.failed_at is not None:
+            return float(self.evidence.failed_at)
+        return float(self.strength_factor)
+
+    @property
+    def equilibrium(self) -> Step | None:
+        """The last step that found equilibrium (the state ``displacement``
+        belongs to), or None when no step did."""
+        for step in reversed(self.steps):
+            if step.converged:
+                return step
+        return None
 
     @property
     def verdict(self) -> str:
@@ -256,6 +282,7 @@ def tabulate(system: System, state: SpringState, resp, strength_factor: float, r
         cap,
         state.state,
         state.first_failure,
+        resp.capacity,
     )
     faces = system.interfaces
     m = springs.points_per_interface

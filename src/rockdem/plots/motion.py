@@ -24,6 +24,18 @@ def _motion(a, use: str) -> tuple[np.ndarray, str]:
     raise ValueError(f"use must be 'auto', 'displacement' or 'mechanism', not {use!r}")
 
 
+def deformed_state(a) -> tuple[float, float] | None:
+    """``(strength factor, load factor)`` of the state ``a.displacement`` shows,
+    or None when no equilibrium was found (the displacements are then zero or
+    belong to another state)."""
+    if a.stable:
+        return float(a.strength_factor), float(a.load_factor)
+    step = a.equilibrium
+    if step is None or not np.any(a.displacement):
+        return None
+    return float(step.strength_factor), float(a.load_factor)
+
+
 def auto_magnification(blocks, motion: np.ndarray, share: float = 0.05) -> float:
     """A 1-2-5 factor that makes the largest block motion about ``share`` of the extent."""
     top = float(c.motion_size(blocks, motion).max()) if blocks.n_blocks else 0.0
@@ -147,9 +159,22 @@ def plot_deformed(
     if title is None:
         if kind == "displacement":
             top = float(size.max())
-            title = f"Deformed shape, displacements magnified x{mag:g} (largest {top:.3g} {unit})"
+            where = deformed_state(a)
+            if where is None:
+                at = f"F = {a.strength_factor:.4g}, no equilibrium found"
+            elif a.stable:
+                at = f"F = {where[0]:.4g}"
+            else:
+                at = f"the last equilibrium, F = {where[0]:.4g}, load factor {where[1]:.3g}"
+            title = (
+                f"Deformed shape at {at}: displacements magnified x{mag:g} "
+                f"(largest {top:.3g} {unit})"
+            )
         else:
-            title = f"Failure mechanism: how the blocks move (direction, drawn x{mag:g})"
+            title = (
+                f"Failure mechanism at F = {a.strength_factor:.4g}: how the blocks move "
+                f"(direction, drawn x{mag:g})"
+            )
     ax.set_title(title, fontsize=10)
     ax.legend(
         handles=[

@@ -130,6 +130,7 @@ def plot_failure(
         interface), ``"slip-surface"``; PolyCollection ``"unstable"``.
     """
     a = c.as_analysis(result)
+    fos = result if isinstance(result, c.FactorOfSafety) else None
     system = a.system
     blocks = system.blocks
     ax = c.new_axes(ax)
@@ -177,10 +178,7 @@ def plot_failure(
         draw_block_ids(ax, blocks, free_only=True)
     c.setup_space_axes(ax, blocks, unit, scale_bar=scale_bar)
     if title is None:
-        verdict = ("stable" if a.stable else "unstable") if frame.final else frame.label
-        title = f"Failure state: {verdict}"
-        if frame.final:
-            title += f" (F = {a.strength_factor:.4g})"
+        title = state_title(a, fos) if frame.final else f"Failure state: {frame.label}"
     ax.set_title(title)
     if legend:
         handles = [
@@ -216,6 +214,16 @@ def plot_failure(
             )
         ax.legend(handles=handles, loc="upper right", fontsize=7, framealpha=0.9)
     return ax
+
+
+def state_title(a, fos=None) -> str:
+    """``"Failure state at F = 0.9123: unstable (factor of safety 0.825)"``: the
+    factor is the one the analysis reports, the factor of safety is named
+    beside it, never implied."""
+    title = f"Failure state at F = {a.strength_factor:.4g}: {a.verdict}"
+    if fos is not None and fos.value is not None:
+        title += f" (factor of safety {fos.value:.3f})"
+    return title
 
 
 def _pick(n: int, most: int) -> list[int]:

@@ -157,7 +157,7 @@ def plot_joint_stress(
         strength (gids ``"tau"``, ``"strength"``); failed points marked
         (red: shear, blue: tension; gids ``"failed-shear"``, ``"failed-tension"``).
     """
-    a = c.as_analysis(result)
+    a = stress_analysis(result)
     chosen = select_interfaces(a, joint, interfaces)
     path = joint_path(a, chosen)
     sp = a.springs
@@ -197,11 +197,17 @@ def plot_joint_stress(
     ax_s.axhline(0.0, color="#999999", lw=0.6)
     ax_s.set_ylabel(f"σ ({stress_unit})")
     ax_s.legend(fontsize=7, loc="best")
+    F = a.stress_factor
     xt, yt = _broken(x, np.abs(sp.tau[s]), path.piece)
-    xc, yc = _broken(x, sp.capacity[s], path.piece)
+    xc, yc = _broken(x, shown_strength(a)[s], path.piece)
     ax_t.plot(xt, yt, "-o", ms=3, color=c.OKABE_ITO["black"], gid="tau", label="|shear stress|")
     ax_t.plot(
-        xc, yc, "--", color=c.OKABE_ITO["bluish_green"], gid="strength", label="shear strength"
+        xc,
+        yc,
+        "--",
+        color=c.OKABE_ITO["bluish_green"],
+        gid="strength",
+        label=f"shear strength at F = {F:.4g}",
     )
     for st, name in ((1, "shear"), (2, "tension")):
         m = sp.state[s] == st
@@ -222,11 +228,53 @@ def plot_joint_stress(
     ax_t.set_ylabel(f"τ ({stress_unit})")
     ax_t.set_xlabel(f"distance along the joint ({unit})")
     ax_t.legend(fontsize=7, loc="best")
-    kinds = sorted(set(a.interfaces.kind[path.interfaces].tolist()))
     if title is None:
+        state = "" if a.stable else "; no equilibrium: the solver's last iterate"
         title = (
-            f"Stress along {', '.join(kinds) or 'no interface'} "
-            f"({len(path.interfaces)} interfaces, F = {a.strength_factor:.4g})"
+            f"Stress along {path_text(a, path)} from point 0 "
+            f"({len(path.interfaces)} interfaces, F = {F:.4g}{state})"
         )
     fig.suptitle(title, fontsize=11)
     return fig
+
+
+def stress_analysis(result):
+    """The analysis whose stresses a stress plot shows.
+
+    For a factor-of-safety search, the last equilibrium (the stable end of
+    the bracket): the failed trial has no equilibrium stresses to show.
+    """
+    if isinstance(result, c.FactorOfSafety) and result.stable_analysis is not None:
+        return result.stable_analysis
+    return c.as_analysis(result)
+
+
+def shown_strength(a) -> np.ndarray:
+    """Shear strength of every spring at the factor its stresses were evaluated at.
+
+    ``springs.strength`` when recorded; else the full strength divided by
+    ``a.stress_factor`` (c and tan(phi) are divided by the same factor).
+    """
+    sp = a.springs
+    if getattr(sp, "strength", None) is not None:
+        return np.asarray(sp.strength)
+    return np.asarray(sp.capacity) / a.stress_factor
+
+
+def path_kinds(a, path: JointPath) -> list[str]:
+    """Joint names along a path in the order drawn (a name repeats when the path
+    returns to it after another)."""
+    names = a.interfaces.kind[path.interfaces].tolist()
+    return [n for k, n in enumerate(names) if k == 0 or n != names[k - 1]]
+
+
+def path_text(a, path: JointPath, most: int = 5) -> str:
+    """The joints of a path in the order drawn: ``"upper → vertical → lower"``;
+    a longer sequence names each joint once, in order of first appearance."""
+    kinds = path_kinds(a, path)
+    if not kinds:
+        return "no interface"
+    if len(kinds) <= most:
+        return " → ".join(kinds)
+    first = list(dict.fromkeys(kinds))
+    return " → ".join(first) + f" (alternating, {len(kinds)} stretches)"

@@ -174,7 +174,8 @@ def save_pictures(result: Study | Stabilisation, folder, *, dpi: int = 110) -> l
         for s in result.excavation.stages:
             fig, ax = plt.subplots(figsize=(8, 5))
             plot_failure(s.analysis, ax=ax, title=f"stage {s.number}: {s.name} "
-                         f"({'stable' if s.stable else 'unstable'}, "
+                         f"({'stable' if s.stable else 'unstable'} at "
+                         f"F = {s.analysis.strength_factor:.4g}, "
                          f"{len(s.new_failures)} joints failed in this stage)")
             fig.tight_layout()
             path = folder / f"stage-{s.number:02d}.png"
@@ -198,7 +199,7 @@ def trial_picture(trial, original: Model, target: float, *, ax=None, title: str 
     if title is None:
         title = (f"trial {trial.number}: {trial.label}\n{len(trial.removed_blocks)} blocks "
                  f"removed (area {trial.removed_area:.2f}), FS {describe(trial.fos)}, "
-                 f"target {target:g}")
+                 f"target {target:g}; state shown at F = {shown.strength_factor:.4g}")
     ax = plot_failure(shown, ax=ax, title=title)
     b = original.blocks
     removed = [v for v, i in zip(b.polygons(), b.ids, strict=True) if int(i) in
