@@ -21,6 +21,7 @@ from scipy.sparse.csgraph import connected_components
 from .certificate import certificate_for, prove_failed_trial, prove_in_region, with_certificate
 from .linalg import factorize
 from .model import Model
+from .relaxation import confirm_failed_trial
 from .results import Analysis, Evidence, FactorOfSafety, Step, Trial, tabulate
 from .solver import Solve, System, build_system, residual, solve_equilibrium
 from .spring_law import SpringState, commit
@@ -93,13 +94,20 @@ def _settle(
         sol.reached,
         sol.reached_q,
         sol.failed_at,
+        sol.relaxation,
     )
     return out, state
 
 
 def _evidence(sol: Solve) -> Evidence:
     return Evidence(
-        sol.reason, sol.iterations, tuple(sol.residuals), None, sol.reached, sol.failed_at
+        sol.reason,
+        sol.iterations,
+        tuple(sol.residuals),
+        None,
+        sol.reached,
+        sol.failed_at,
+        relaxation=sol.relaxation,
     )
 
 
@@ -442,6 +450,7 @@ def factor_of_safety(
     lo, hi = lo_an.strength_factor, hi_F
     if hi_an is not None and hi_an.evidence.certified is None:
         hi_an, trials = prove_failed_trial(system, hi_an, lo_an.state, hi, trials)
+        hi_an, trials = confirm_failed_trial(system, hi_an, lo_an, hi, trials)
     return FactorOfSafety(
         0.5 * (lo + hi), (lo, hi), "strength", tuple(trials), lo_an, hi_an, _DEFINITION
     )

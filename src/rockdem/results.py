@@ -6,6 +6,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .relaxation import MECHANISM_TEXT
 from .solver import System
 from .spring_law import STATE_NAMES, SpringState, strength
 
@@ -24,21 +25,31 @@ class Evidence:
     certificate: str | None = None
     #: the strength factor at which the LP was solved
     certified_at: float | None = None
+    #: dynamic relaxation's statement on the failure (rockdem.relaxation)
+    relaxation: str | None = None
 
     @property
     def proof(self) -> str | None:
         """How a failure is known: ``"lp-certificate"`` (no statically admissible
-        force field exists: proven), ``"undecided"`` (the solver found no
-        equilibrium but nothing proves that none exists); None if converged."""
+        force field exists: proven), ``"dynamic-relaxation"`` (not proven, but
+        confirmed by a second, independent method: the blocks keep moving),
+        ``"undecided"`` (the solver found no equilibrium and nothing settles
+        whether one exists); None if converged."""
         if self.reason == "converged" or self.reason == "no load":
             return None
-        return "lp-certificate" if self.certified else "undecided"
+        if self.certified:
+            return "lp-certificate"
+        if self.relaxation is not None and self.relaxation.startswith(MECHANISM_TEXT):
+            return "dynamic-relaxation"
+        return "undecided"
 
     def __str__(self) -> str:
         last = self.residuals[-1] if self.residuals else float("nan")
         text = f"{self.reason} after {self.iterations} iterations (residual {last:.2e})"
         if self.certificate is not None:
             text += f"; {self.certificate}"
+        if self.relaxation is not None:
+            text += f"; {self.relaxation}"
         return text
 
 

@@ -33,6 +33,7 @@ from .interfaces import Interfaces, assign_joints, find_interfaces
 from .linalg import Factorizer, factorize
 from .loads import block_loads
 from .model import Model
+from .relaxation import relax
 from .spring_law import Response, SpringState, evaluate
 from .springs import Springs, place_springs
 
@@ -58,6 +59,9 @@ HOMOTOPY_ITERATIONS = 25
 RELEASE_LAST = 1e-3
 #: smallest relative step of the homotopy before equilibrium is declared lost
 HOMOTOPY_MIN_STEP = 1e-4
+#: dynamic relaxation steps spent checking that a Newton failure at the limit
+#: is not a stall (it starts within the resolution of the limit)
+STALL_CHECK_STEPS = 1_000
 
 
 @dataclass(frozen=True, eq=False, repr=False)
@@ -139,6 +143,8 @@ class Solve:
     reached: float | None = None
     reached_q: np.ndarray | None = None
     failed_at: float | None = None
+    #: the second method's statement on the failure (rockdem.relaxation)
+    relaxation: str | None = None
 
 
 def residual(system: System, q, state, load_factor, factor):
@@ -376,7 +382,18 @@ def _strength_homotopy(system, state, lam, target, F_ok, q_ok, bad, smallest, ma
     while True:
         F_try = F_ok + step
         if bad is not None and abs(bad[0] - F_ok) < smallest:
-            if bad[1] <= smallest * (1 + 1e-9):  # confirmed from close by: the limit
+            if bad[1] <= smallest * (1 + 1e-9):  # Newton failed from close by
+                # ... a second, independent method looks for equilibrium there
+                dr = relax(system, state, lam, bad[0], q_ok, max_steps=STALL_CHECK_STEPS)
+                if dr.status == "equilibrium":
+                    polish = _newton(system, state, lam, bad[0], dr.q, HOMOTOPY_ITERATIONS)
+                    total += polish.iterations
+                    if polish.converged:  # a stall, not the limit: go on from there
+                        if bad[0] == target:
+                            return replace(polish, iterations=total, residuals=history)
+                        F_ok, q_ok, step = bad[0], polish.q, bad[1]
+                        bad = None
+                        continue
                 reason = f"no equilibrium beyond strength factor {F_ok:.6g} ({last.reason})"
                 return Solve(
                     False,
@@ -389,6 +406,7 @@ def _strength_homotopy(system, state, lam, target, F_ok, q_ok, bad, smallest, ma
                     F_ok,
                     q_ok,
                     bad[0],
+                    str(dr) if dr.status != "equilibrium" else f"{dr}; Newton could not polish it",
                 )
             F_try = bad[0]  # tried from afar: try again from here
         elif bad is not None and (F_try - bad[0]) * step >= 0:  # never past a failure

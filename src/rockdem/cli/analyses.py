@@ -79,6 +79,8 @@ def _write(folder: Path, analysis, document: dict[str, Any], overwrite: bool, qu
 _PROOF = {
     "lp-certificate": "proven: no statically admissible force field carries the loads "
     "(equilibrium LP)",
+    "dynamic-relaxation": "confirmed by a second method: dynamic relaxation from the last "
+    "equilibrium leaves the blocks moving (not a proof; an admissible force field exists)",
     "undecided": "[yellow]undecided[/yellow]: the solver found no equilibrium, but an "
     "admissible force field exists; failure is not proven (the factor may be higher)",
     None: "none needed (equilibrium found)",

@@ -1,0 +1,139 @@
+"""A second, independent solver: dynamic relaxation with local damping.
+
+Newton's method can stall on the non-smooth spring law although equilibrium
+exists, so "Newton found none" is not a verdict.  Dynamic relaxation solves
+the same equations ``r(q) = lambda f - B^T F(q) = 0`` another way, as the
+explicit dynamics of the blocks, the scheme of UDEC and PFC (Cundall 1987):
+
+* each degree of freedom gets the fictitious mass ``M_ii = sum_j |K0_ij|``
+  (Gershgorin: every frequency of ``M^-1 K`` is then at most 1, and a unit
+  time step is stable for any tangent, since sliding and opening springs
+  only soften);
+* local non-viscous damping: the force driving each degree of freedom is
+  reduced by ``DAMPING x |r_i|`` against its velocity (Cundall's local
+  damping, 0.8 as in UDEC), so the blocks settle without a damping constant
+  tied to a frequency.
+
+The run ends in one of three ways.  ``equilibrium``: the unbalanced force
+fell below ``tolerance`` of the loads (the caller polishes with Newton).
+``mechanism``: the budget ran out with blocks still moving: over the
+last quarter of the run some block moved more than its elastic response
+while the unbalanced force stayed well above the tolerance (UDEC's
+"unbalanced force does not go to zero, velocities do not stop").
+``undecided``: neither.  A confirmation by an independent method, not a
+proof; the proof is the LP of :mod:`rockdem.certificate`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .spring_law import SpringState
+
+#: Cundall's local damping coefficient (UDEC's default)
+DAMPING = 0.8
+#: how a run that found the blocks still moving states it
+MECHANISM_TEXT = "dynamic relaxation: mechanism"
+#: steps of one run (bounded work: each step is two sparse products)
+MAX_STEPS = 4_000
+#: out-of-balance force, as a share of the loads, that counts as equilibrium
+TOLERANCE = 1e-5
+#: a failed strength trial is confirmed this far beyond the top of its bracket
+CONFIRM_MARGIN = 0.02
+#: still failing at the end if, over the last quarter of the run, some block
+#: moved more than its elastic response ...
+MECHANISM_MOTION = 1.0
+#: ... while the unbalanced force never fell below this multiple of the tolerance
+STEADY_FORCE = 30.0
+
+
+@dataclass(frozen=True)
+class Relaxation:
+    """Outcome of one dynamic relaxation run."""
+
+    status: str  # "equilibrium", "mechanism" or "undecided"
+    q: np.ndarray
+    steps: int
+    ratio: float  # final unbalanced force / loads (scaled norms)
+    motion: float  # largest scaled displacement over the last quarter, / elastic
+
+    def __str__(self) -> str:
+        return (
+            f"dynamic relaxation: {self.status} after {self.steps} steps "
+            f"(unbalanced force ratio {self.ratio:.2e}, late motion x{self.motion:.3g} elastic)"
+        )
+
+
+def relax(
+    system,
+    state: SpringState,
+    load_factor: float,
+    factor: float,
+    q0: np.ndarray,
+    *,
+    max_steps: int = MAX_STEPS,
+    tolerance: float = TOLERANCE,
+) -> Relaxation:
+    """Damped explicit dynamics from ``q0`` at the given load and strength factors."""
+    from .solver import residual  # the same equations as Newton (import here: no cycle)
+
+    asm = system.assembly
+    scale = asm.dof_scale
+    f_norm = np.linalg.norm(load_factor * system.f_ext * scale)
+    q = q0.astype(float, copy=True)
+    if asm.n_dof == 0 or f_norm == 0.0:
+        return Relaxation("equilibrium", q, 0, 0.0, 0.0)
+    mass = np.asarray(abs(system.K0).sum(axis=1)).ravel()
+    elastic = system.elastic_scale * max(load_factor, 1e-12)
+    v = np.zeros_like(q)
+    _, r = residual(system, q, state, load_factor, factor)
+    ratio = np.linalg.norm(r * scale) / f_norm
+    late_start, late_low = None, np.inf
+    step = 0
+    for step in range(1, max_steps + 1):
+        v += (r - DAMPING * np.abs(r) * np.sign(v)) / mass
+        q += v
+        _, r = residual(system, q, state, load_factor, factor)
+        ratio = np.linalg.norm(r * scale) / f_norm
+        if not np.isfinite(ratio):
+            break
+        if ratio <= tolerance:
+            return Relaxation("equilibrium", q, step, float(ratio), 0.0)
+        if step == (3 * max_steps) // 4:
+            late_start = q.copy()
+        if late_start is not None:
+            late_low = min(late_low, ratio)
+    motion = 0.0
+    if late_start is not None:
+        motion = float(np.max(np.abs((q - late_start) / scale))) / elastic
+    moving = motion > MECHANISM_MOTION and late_low > STEADY_FORCE * tolerance
+    status = "mechanism" if moving else "undecided"
+    return Relaxation(status, q, step, float(ratio), motion)
+
+
+def confirm_failed_trial(system, failed, base, factor: float, trials):
+    """A failed strength trial that the LP could not prove, checked by dynamic
+    relaxation a little beyond the limit (``factor x (1 + CONFIRM_MARGIN)``),
+    from the last stable trial ``base``: a mechanism there is stated in the
+    failed trial's evidence (proof ``"dynamic-relaxation"``).  Right at the
+    limit the excess force is too small for the blocks to move visibly."""
+    from dataclasses import replace
+
+    last = failed.steps[-1]
+    if last.evidence.certified:
+        return failed, trials
+    asm = system.assembly
+    free = ~system.blocks.fixed
+    q0 = np.zeros(asm.n_dof)
+    q0[asm.dof[free].ravel()] = base.displacement[free].ravel()
+    beyond = factor * (1.0 + CONFIRM_MARGIN)
+    run = relax(system, base.state.without_slip(), base.load_factor, beyond, q0)
+    text = f"{run} at F = {beyond:.6g} ({CONFIRM_MARGIN:.0%} beyond the bracket)"
+    ev = replace(last.evidence, relaxation=text)
+    failed = replace(failed, steps=(*failed.steps[:-1], replace(last, evidence=ev)))
+    trials = list(trials)
+    last_failed = max(i for i, t in enumerate(trials) if not t.stable)
+    trials[last_failed] = replace(trials[last_failed], evidence=ev)
+    return failed, trials
