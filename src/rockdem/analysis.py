@@ -19,7 +19,7 @@ from scipy.sparse import coo_array
 from scipy.sparse.csgraph import connected_components
 
 from .certificate import certificate_for, prove_failed_trial, prove_in_region, with_certificate
-from .linalg import factorize
+from .linalg import factorize, norm
 from .model import Model
 from .relaxation import confirm_failed_trial
 from .results import Analysis, Evidence, FactorOfSafety, Step, Trial, tabulate
@@ -50,7 +50,7 @@ def _settle(
     """
     tol = system.model.settings.tolerance
     scale = system.assembly.dof_scale
-    f_norm = np.linalg.norm(load_factor * system.f_ext * scale)
+    f_norm = norm(load_factor * system.f_ext * scale)
     sol = solve_equilibrium(
         system,
         state,
@@ -70,7 +70,7 @@ def _settle(
             new_state = new_state.without_slip()
         resp, r = residual(system, sol.q, new_state, load_factor, factor)
         state = new_state
-        if f_norm == 0 or np.linalg.norm(r * scale) <= tol * f_norm:
+        if f_norm == 0 or norm(r * scale) <= tol * f_norm:
             sol = Solve(True, sol.q, resp, iterations, history, "converged", sol.direction)
             break
         sol = solve_equilibrium(

@@ -30,7 +30,7 @@ from .assembly import Assembly, build_assembly
 from .blocks import Blocks
 from .errors import InputError
 from .interfaces import Interfaces, assign_joints, find_interfaces
-from .linalg import Factorizer, factorize
+from .linalg import Factorizer, factorize, norm
 from .loads import block_loads
 from .model import Model
 from .relaxation import relax
@@ -176,9 +176,9 @@ def _newton(system, state, load_factor, factor, q, max_it):
     asm = system.assembly
     scale = asm.dof_scale
     tol = system.model.settings.tolerance
-    f_norm = np.linalg.norm(load_factor * system.f_ext * scale)
+    f_norm = norm(load_factor * system.f_ext * scale)
     resp, r = residual(system, q, state, load_factor, factor)
-    merit = np.linalg.norm(r * scale) / f_norm
+    merit = norm(r * scale) / f_norm
     history = [merit]
     beta = BETA_START
     bound = BLOWUP * system.elastic_scale * max(load_factor, 1e-12)
@@ -198,7 +198,7 @@ def _newton(system, state, load_factor, factor, q, max_it):
         for _ in range(LINE_SEARCH_HALVINGS):
             q_try = q + alpha * step
             resp_try, r_try = residual(system, q_try, state, load_factor, factor)
-            merit_try = np.linalg.norm(r_try * scale) / f_norm
+            merit_try = norm(r_try * scale) / f_norm
             if merit_try <= (1.0 - 1e-4 * alpha) * merit:
                 accepted = True
                 break
@@ -299,7 +299,7 @@ def solve_equilibrium(
     asm = system.assembly
     max_it = max_iterations or system.model.settings.max_iterations
     q = np.zeros(asm.n_dof) if q0 is None else q0.copy()
-    f_norm = np.linalg.norm(load_factor * system.f_ext * asm.dof_scale)
+    f_norm = norm(load_factor * system.f_ext * asm.dof_scale)
     if asm.n_dof == 0 or f_norm == 0.0:
         resp, _ = residual(system, q, state, load_factor, strength_factor)
         return Solve(True, q, resp, 0, [0.0], "no load", np.zeros_like(q))

@@ -104,12 +104,11 @@ def evaluate(
     """
     c, tan_phi, tensile = strength(springs, state, factor, reduce_tensile)
     kn, ks = springs.kn, springs.ks
-    pull = kn * dn
+    pull, sigma, raw_cap, tau_trial = trial_stresses(
+        springs, state.slip, (c, tan_phi, tensile), dn, ds
+    )
     is_open = pull > tensile
-    sigma = -np.minimum(pull, tensile)
-    raw_cap = c + sigma * tan_phi
     cap = np.maximum(raw_cap, 0.0)
-    tau_trial = ks * (ds - state.slip)
     sliding = np.abs(tau_trial) > cap
     sign = np.sign(tau_trial)
     tau = np.where(sliding, sign * cap, tau_trial)
@@ -117,6 +116,23 @@ def evaluate(
     d_ss = np.where(sliding, 0.0, ks)
     d_sn = np.where(sliding & ~is_open & (raw_cap > 0), -sign * kn * tan_phi, 0.0)
     return Response(sigma, tau, cap, is_open, sliding, d_sn, d_ss, d_nn)
+
+
+def trial_stresses(springs: Springs, slip, strengths, dn, ds):
+    """``(kn dn, sigma, c + sigma tan phi, ks (ds - slip))``: the law's core,
+    shared by :func:`evaluate` and the force-only :func:`forces`."""
+    c, tan_phi, tensile = strengths
+    pull = springs.kn * dn
+    sigma = -np.minimum(pull, tensile)
+    return pull, sigma, c + sigma * tan_phi, springs.ks * (ds - slip)
+
+
+def forces(springs: Springs, slip, strengths, dn, ds) -> np.ndarray:
+    """Generalised forces ``(-sigma, tau)`` only (no tangent), shape (n, 2):
+    for explicit dynamics, where the strengths are fixed for the whole run."""
+    _, sigma, raw_cap, tau_trial = trial_stresses(springs, slip, strengths, dn, ds)
+    cap = np.maximum(raw_cap, 0.0)
+    return np.column_stack([-sigma, np.clip(tau_trial, -cap, cap)])
 
 
 def commit(
