@@ -108,13 +108,20 @@ def test_model_figure(model, analysis):
 
 
 def test_failure_state_colours(analysis):
-    ax = plots.plot_failure(analysis)
+    # the history (current=False): one segment per interface, worst flag so far
+    ax = plots.plot_failure(analysis, current=False)
     state = analysis.interfaces.state
     assert (state == 1).sum() >= 1 and (state == 2).sum() >= 1
     assert count_colour(ax, RED) == (state == 1).sum()
     assert count_colour(ax, BLUE) == (state == 2).sum()
     assert len(by_gid(ax, "interfaces-elastic").get_segments()) == (state == 0).sum()
     assert not [c for c in ax.collections if c.get_gid() == "unstable"]
+    # the default: the current state, one stretch per spring point
+    ax = plots.plot_failure(analysis)
+    now = analysis.springs.current
+    assert count_colour(ax, RED) == (now == 2).sum()
+    assert count_colour(ax, BLUE) == (now == 3).sum()
+    assert len(by_gid(ax, "interfaces-elastic").get_segments()) == (now == 0).sum()
 
 
 def test_failure_state_of_mechanism(fos):
@@ -123,7 +130,7 @@ def test_failure_state_of_mechanism(fos):
     assert len(by_gid(ax, "slip-surface").get_segments()) == len(a.slip_surface) > 0
     shaded = by_gid(ax, "unstable", PolyCollection)
     assert len(shaded.get_paths()) == int(a.unstable.sum()) > 0
-    assert count_colour(ax, RED) == (a.interfaces.state == 1).sum()
+    assert count_colour(ax, RED) == (a.springs.current == 2).sum()
 
 
 def test_deformed_blocks_moved_by_magnified_displacement(analysis):
@@ -182,9 +189,9 @@ def test_stress_along_joint(analysis):
     )
     strength = np.asarray(lines["strength"].get_ydata(), dtype=float)
     assert np.allclose(np.sort(strength[np.isfinite(strength)]), np.sort(sp.capacity[want]))
-    n_shear = int((sp.state[want] == 1).sum())
-    if n_shear:
-        assert len(lines["failed-shear"].get_xdata()) == n_shear
+    n_sliding = int((sp.current[want] == 2).sum())
+    if n_sliding:
+        assert len(lines["now-sliding"].get_xdata()) == n_sliding
     path = next(c for ax in fig.axes for c in ax.collections if c.get_gid() == "path")
     assert len(path.get_segments()) == len(chosen)
 

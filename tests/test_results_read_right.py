@@ -24,6 +24,7 @@ from rockdem import plots
 from rockdem.config import load_model
 from rockdem.examples import example_path
 from rockdem.report import write_report
+from rockdem.results import format_factor
 from test_plots_models import wedge
 
 pytestmark = pytest.mark.filterwarnings(
@@ -69,7 +70,7 @@ def test_stress_plot_never_shows_shear_above_the_strength_drawn(layers, which):
     assert np.all(tau <= strength * (1 + 1e-9) + 1e-12)
     # the strength line and the title name the factor of the stresses shown
     a = fos.stable_analysis if which == "search" else shown
-    F = f"F = {a.stress_factor:.4g}"
+    F = f"F = {format_factor(a.stress_factor)}"
     assert F in lines["strength"].get_label()
     assert F in fig._suptitle.get_text()
 
@@ -106,7 +107,7 @@ def test_failure_title_names_the_factor_of_the_state_and_the_fos_apart(layers):
     _, _, fos = layers
     ax = plots.plot_failure(fos)
     title = ax.get_title()
-    assert f"F = {fos.failed_analysis.strength_factor:.4g}" in title
+    assert f"F = {format_factor(fos.failed_analysis.strength_factor)}" in title
     assert f"factor of safety {fos.value:.3f}" in title
     assert "just above" not in title
 
@@ -126,7 +127,7 @@ def test_report_says_just_above_only_when_it_is(tmp_path, layers):
             m, tmp_path / case, analysis=run, fos=f, animation=False, image_format="svg"
         )
         caps = " ".join(_captions(path.read_text(encoding="utf-8")))
-        assert f"F = {failed.strength_factor:.4g}" in caps
+        assert f"F = {format_factor(failed.strength_factor)}" in caps
         assert ("just above the factor of safety" in caps) == (case == "near")
 
 
@@ -153,4 +154,89 @@ def test_deformed_and_mechanism_titles_carry_their_factor(layers):
     assert t.startswith("Deformed shape at F = 1")
     _, _, fos = layers
     t = plots.plot_deformed(fos.failed_analysis, use="mechanism").get_title()
-    assert f"Failure mechanism at F = {fos.failed_analysis.strength_factor:.4g}" in t
+    assert f"Failure mechanism at F = {format_factor(fos.failed_analysis.strength_factor)}" in t
+
+
+# ------------------------------------------------- current state vs history
+@pytest.fixture(scope="module")
+def bedded():
+    """The bedded slope stands (FS about 1.2) although many joints failed on the way."""
+    m = example("bedded-slope")
+    a = rd.analyse(m)
+    assert a.stable
+    return m, a
+
+
+def test_current_state_follows_the_stresses_now(bedded):
+    _, a = bedded
+    sp = a.springs
+    now = sp.current
+    assert set(np.unique(now)) == {0, 1, 2, 3}
+    assert np.all(sp.sigma[now == 3] <= 1e-9)  # open: no compression
+    closed = (now == 0) | (now == 1)
+    assert np.all(np.abs(sp.tau[closed]) < sp.strength[closed] + 1e-12)
+    assert np.allclose(np.abs(sp.tau[now == 2]), sp.strength[now == 2], rtol=1e-5)
+    # history and current state are different things: failed earlier, holding now
+    failed = a.state.yielded | a.state.broken
+    assert np.all(failed[now == 1]) and not np.any(failed[now == 0])
+
+
+def test_joints_failed_in_tension_and_closed_again_are_history_not_open(bedded):
+    _, a = bedded
+    ir = a.interfaces
+    healed = (ir.state == 2) & (ir.current == 1)
+    assert healed.any()
+    assert np.all(ir.normal_stress[healed] > 0)  # closed, in compression now
+    assert not np.any(ir.current_name[healed] == "open")
+    # in the picture: their points are drawn as history (dashed), never as open (blue)
+    ax = plots.plot_failure(a)
+    coll = {c.get_gid(): c for c in ax.collections}
+    sp_now = a.springs.current
+    assert len(coll["interfaces-open"].get_segments()) == int((sp_now == 3).sum())
+    assert len(coll["interfaces-closed-failed-earlier"].get_segments()) == int(
+        (sp_now == 1).sum()
+    )
+    labels = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert any(t.startswith("failed earlier, now closed (") for t in labels)
+    assert ax.get_legend().get_title().get_text().startswith("joints now")
+
+
+def test_tables_and_csv_keep_the_current_state_apart_from_the_history(bedded, tmp_path):
+    import csv
+
+    from rockdem.output import analysis_summary, analysis_tables, write_results
+
+    _, a = bedded
+    summary = analysis_summary(a)
+    states = summary["interface_states"]
+    ir = a.interfaces
+    assert states["now"]["open"] == int((ir.current == 3).sum())
+    assert states["now"]["sliding"] == int((ir.current == 2).sum())
+    assert sum(states["history"].values()) == sum(states["now"].values()) == ir.n_interfaces
+    assert sum(v for k, v in states["history"].items() if k != "elastic") == len(
+        summary["failed_interfaces"]
+    )
+    write_results(tmp_path / "r", analysis_tables(a), {"summary": summary})
+    with (tmp_path / "r" / "interfaces.csv").open() as fh:
+        rows = list(csv.DictReader(fh))
+    healed = [r for r in rows if r["current_state"] == "closed-failed-earlier"]
+    assert healed and all(r["state"] in ("shear", "tension") for r in healed)
+    assert {"open_fraction", "sliding_fraction"} <= set(rows[0])
+    with (tmp_path / "r" / "springs.csv").open() as fh:
+        spr = list(csv.DictReader(fh))
+    assert {"current_state", "strength_at_factor"} <= set(spr[0])
+
+
+def test_run_prints_the_state_now_apart_from_the_history():
+    from typer.testing import CliRunner
+
+    from rockdem.cli import app
+
+    r = CliRunner().invoke(app, ["run", "--example", "bedded-slope"])
+    assert r.exit_code == 0, r.output
+    text = r.stdout
+    assert "STABLE" in text
+    assert "joints now (" in text and "failure history: " in text
+    assert "failed joints (" not in text
+    now_line = next(ln for ln in text.splitlines() if ln.startswith("joints now"))
+    assert "failed earlier and now closed" in now_line

@@ -7,11 +7,21 @@ are written into a temporary folder beside the target and moved into place
 only when all of them are complete.  Existing result files are replaced only
 with ``overwrite=True``.
 
-Sign conventions: normal forces and stresses are compression-positive;
-``state`` is the worst spring state on the interface (``elastic``, ``shear``
-or ``tension``); ``first_failure`` is the load step (or strength-reduction
-stage) at which the interface first failed, -1 if never; ``local_fos`` is the
-shear strength over the shear stress (``inf`` where unstressed).
+Sign conventions: normal forces and stresses are compression-positive.
+Current state and history are separate columns.  ``current_state`` is the
+state now (of most of the interface's length; ``open_fraction`` and
+``sliding_fraction`` give the shares): ``elastic`` (never failed, holding),
+``closed-failed-earlier`` (failed at some time, now closed and holding),
+``sliding`` (at its shear strength now) or ``open`` (at or beyond its
+tensile strength now).  ``state`` is the history: the worst failure flag the
+interface has ever had (``elastic`` = never failed, ``shear`` = yielded at
+some time, ``tension`` = failed in tension at some time), and
+``failed_fraction`` the share of its length that has ever failed;
+``first_failure`` is the load step (or strength-reduction stage) at which the
+interface first failed, -1 if never; ``local_fos`` is the full shear strength
+over the shear stress (``inf`` where unstressed).  In ``springs.csv``,
+``capacity`` is the full shear strength (F = 1) and ``strength_at_factor``
+the strength at the factor the stresses were found at.
 """
 
 from __future__ import annotations
@@ -28,6 +38,8 @@ from typing import Any
 import numpy as np
 
 from .errors import InputError
+from .results import CURRENT_NAMES
+from .spring_law import STATE_NAMES
 
 #: The files :func:`write_results` writes.
 RESULT_FILES = ("blocks.csv", "interfaces.csv", "springs.csv", "result.json")
@@ -39,6 +51,7 @@ __all__ = [
     "check_output_dir",
     "fos_summary",
     "jsonable",
+    "state_counts",
     "write_results",
 ]
 
@@ -98,6 +111,7 @@ def analysis_tables(analysis) -> dict[str, list[dict[str, Any]]]:
     r = analysis.interfaces
     faces = system.interfaces
     normal_stress, shear_stress, state_name = r.normal_stress, r.shear_stress, r.state_name
+    now_name = r.current_name
     slip = np.zeros(r.n_interfaces, dtype=bool)
     slip[analysis.slip_surface] = True
     interfaces = [
@@ -117,6 +131,9 @@ def analysis_tables(analysis) -> dict[str, list[dict[str, Any]]]:
             "shear_stress": float(shear_stress[i]),
             "state": str(state_name[i]),
             "failed_fraction": float(r.failed_fraction[i]),
+            "current_state": str(now_name[i]),
+            "open_fraction": float(r.open_fraction[i]),
+            "sliding_fraction": float(r.sliding_fraction[i]),
             "local_fos": float(r.local_fos[i]),
             "first_failure": int(r.first_failure[i]),
             "slip_surface": bool(slip[i]),
@@ -125,7 +142,7 @@ def analysis_tables(analysis) -> dict[str, list[dict[str, Any]]]:
     ]
     s = analysis.springs
     point_xy = system.springs.point
-    fos, s_state = s.local_fos, s.state_name
+    fos, s_state, s_now = s.local_fos, s.state_name, s.current_name
     springs = [
         {
             "interface": int(s.interface[k]),
@@ -135,7 +152,9 @@ def analysis_tables(analysis) -> dict[str, list[dict[str, Any]]]:
             "sigma": float(s.sigma[k]),
             "tau": float(s.tau[k]),
             "capacity": float(s.capacity[k]),
+            "strength_at_factor": float(s.strength[k]),
             "state": str(s_state[k]),
+            "current_state": str(s_now[k]),
             "first_failure": int(s.first_failure[k]),
             "local_fos": float(fos[k]),
         }
@@ -146,7 +165,7 @@ def analysis_tables(analysis) -> dict[str, list[dict[str, Any]]]:
 
 def _failed(analysis) -> list[dict[str, Any]]:
     r = analysis.interfaces
-    names = r.state_name
+    names, now = r.state_name, r.current_name
     return [
         {
             "interface": int(i),
@@ -155,18 +174,37 @@ def _failed(analysis) -> list[dict[str, Any]]:
             "kind": str(r.kind[i]),
             "state": str(names[i]),
             "failed_fraction": float(r.failed_fraction[i]),
+            "current_state": str(now[i]),
             "first_failure": int(r.first_failure[i]),
         }
         for i in analysis.failed_interfaces
     ]
 
 
+def state_counts(analysis) -> dict[str, dict[str, int]]:
+    """Interfaces by current state and by failure history, kept apart.
+
+    ``now``: elastic, closed-failed-earlier, sliding, open (each interface by
+    the state of most of its length); ``history``: elastic (never failed),
+    shear (yielded at some time), tension (failed in tension at some time).
+    """
+    r = analysis.interfaces
+    now = np.bincount(r.current, minlength=len(CURRENT_NAMES))
+    ever = np.bincount(r.state, minlength=len(STATE_NAMES))
+    return {
+        "now": {name: int(n) for name, n in zip(CURRENT_NAMES, now, strict=True)},
+        "history": {name: int(n) for name, n in zip(STATE_NAMES, ever, strict=True)},
+    }
+
+
 def analysis_summary(analysis) -> dict[str, Any]:
     """The verdict of a staged analysis as plain data.
 
     Keys: ``stable``, ``verdict``, ``load_factor``, ``strength_factor``,
-    ``unstable_blocks`` (ids), ``failed_interfaces`` (rows with the blocks,
-    kind, state and first failure), ``slip_surface`` (interface numbers),
+    ``unstable_blocks`` (ids), ``failed_interfaces`` (the history: every
+    interface that has failed at some time, with the blocks, kind, state,
+    current state and first failure), ``interface_states`` (counts by current
+    state and by history, see :func:`state_counts`), ``slip_surface`` (interface numbers),
     ``steps`` and ``evidence``.
     """
     return jsonable(
@@ -177,6 +215,7 @@ def analysis_summary(analysis) -> dict[str, Any]:
             "strength_factor": analysis.strength_factor,
             "unstable_blocks": [int(i) for i in analysis.unstable_blocks],
             "failed_interfaces": _failed(analysis),
+            "interface_states": state_counts(analysis),
             "slip_surface": [int(i) for i in analysis.slip_surface],
             "steps": [
                 {
@@ -272,10 +311,13 @@ _COLUMNS = {
     ),
     "interfaces": list(
         "interface block_a block_b kind start_x start_y end_x end_y length normal_force "
-        "shear_force normal_stress shear_stress state failed_fraction local_fos "
-        "first_failure slip_surface".split()
+        "shear_force normal_stress shear_stress state failed_fraction current_state "
+        "open_fraction sliding_fraction local_fos first_failure slip_surface".split()
     ),
-    "springs": list("interface point x y sigma tau capacity state first_failure local_fos".split()),
+    "springs": list(
+        "interface point x y sigma tau capacity strength_at_factor state current_state "
+        "first_failure local_fos".split()
+    ),
 }
 
 

@@ -24,7 +24,7 @@ import numpy as np
 from . import plots
 from .analysis import analyse, factor_of_safety
 from .model import Model
-from .results import Analysis, FactorOfSafety
+from .results import Analysis, FactorOfSafety, format_factor
 
 _CSS = """
 body{font-family:system-ui,-apple-system,"Segoe UI",Roboto,Helvetica,Arial,sans-serif;
@@ -97,14 +97,23 @@ def _img(uri: str, caption: str, alt: str, ident: str) -> str:
 
 
 def _state_counts(a: Analysis) -> str:
+    """Current state and failure history of the interfaces, kept apart."""
+    now = np.bincount(a.interfaces.current, minlength=4)
     s = a.interfaces.state
     return (
-        f"{int((s == 1).sum())} shear-yielded, {int((s == 2).sum())} tension-failed, "
-        f"{int((s == 0).sum())} elastic interfaces"
+        f"now {int(now[2])} sliding, {int(now[3])} open, {int(now[1])} failed earlier and "
+        f"now closed, {int(now[0])} elastic interfaces (history: {int((s > 0).sum())} have "
+        f"failed at some time, {int((s == 1).sum())} in shear, {int((s == 2).sum())} in "
+        "tension)"
     )
 
 
+#: current state of a failed interface, in words (codes of rockdem.results.CURRENT_NAMES)
+_NOW = ("closed", "closed", "sliding", "open")
+
+
 def _failed_table(a: Analysis, stress_unit: str, limit: int) -> str:
+    """Every interface that has failed at some time (the history), with its state now."""
     ir = a.interfaces
     faces = a.system.interfaces
     idx = np.flatnonzero(ir.state > 0)
@@ -117,6 +126,7 @@ def _failed_table(a: Analysis, stress_unit: str, limit: int) -> str:
             [
                 str(ir.kind[i]),
                 str(ir.state_name[i]),
+                _NOW[int(ir.current[i])],
                 int(i),
                 f"{int(ir.block_a[i])} / {int(ir.block_b[i])}",
                 f"({_num(faces.start[i][0], '.3g')}, {_num(faces.start[i][1], '.3g')}) - "
@@ -131,7 +141,8 @@ def _failed_table(a: Analysis, stress_unit: str, limit: int) -> str:
         )
     header = [
         "joint",
-        "state",
+        "failed in",
+        "now",
         "interface",
         "blocks",
         "from - to",
@@ -143,11 +154,12 @@ def _failed_table(a: Analysis, stress_unit: str, limit: int) -> str:
         "slip surface",
     ]
     more = f'<p class="note">... and {idx.size - limit} more.</p>' if idx.size > limit else ""
-    table = _table(header, rows, left=2, cls="failed-joints") + more
+    table = _table(header, rows, left=3, cls="failed-joints") + more
     if idx.size <= 15:
         return table
     return (
-        f"<details><summary>{idx.size} failed interfaces (click to show)</summary>{table}</details>"
+        f"<details><summary>{idx.size} interfaces that have failed at some time "
+        f"(click to show)</summary>{table}</details>"
     )
 
 
@@ -260,7 +272,7 @@ def _inputs(model: Model, system, units: str | None) -> str:
 
 def _verdict(a: Analysis, fos: FactorOfSafety | None) -> str:
     cls = "stable" if a.stable else "unstable"
-    F = f"F = {a.strength_factor:.4g}"
+    F = f"F = {format_factor(a.strength_factor)}"
     text = (
         f"STABLE under the full loads ({F})"
         if a.stable
@@ -308,11 +320,11 @@ def _failed_where(failed: Analysis, fos: FactorOfSafety) -> str:
     F = failed.strength_factor
     hi = fos.bracket[1]
     if np.isfinite(hi) and F <= hi * (1 + 1e-9):
-        return f"F = {F:.4g}, just above the factor of safety"
+        return f"F = {format_factor(F)}, just above the factor of safety"
     if fos.value is None:
-        return f"F = {F:.4g}, the factor of the failed trial"
+        return f"F = {format_factor(F)}, the factor of the failed trial"
     return (
-        f"F = {F:.4g}, the factor of the failed trial (the factor of safety is "
+        f"F = {format_factor(F)}, the factor of the failed trial (the factor of safety is "
         f"{fos.value:.3f}: equilibrium was lost at {hi:.4f} within this trial)"
     )
 
@@ -427,12 +439,14 @@ def write_report(
             "fig-model",
         )
     )
-    F1 = f"F = {a.strength_factor:.4g}"
+    F1 = f"F = {format_factor(a.strength_factor)}"
     pics.append(
         fig(
             plots.plot_failure(a, unit=unit).figure,
-            f"Failure state at {F1}: {_state_counts(a)}. Red: shear-yielded; blue: "
-            "tension-failed; grey: elastic; purple band: slip surface; orange: unstable blocks.",
+            f"Failure state at {F1}: {_state_counts(a)}. Each stretch of joint in its "
+            "current state: red sliding, blue open, green dashed failed earlier and now "
+            "closed (history, holding now), grey elastic; purple band: slip surface; orange: "
+            "unstable blocks.",
             "failure state",
             "fig-failure",
         )
@@ -479,7 +493,7 @@ def write_report(
     for k, j in enumerate(joints if joints is not None else [None]):
         f = plots.plot_joint_stress(shown, j, unit=unit, stress_unit=stress_unit)
         label = "the slip surface / failed joints" if j is None else f"joint {j}"
-        at = f"F = {shown.stress_factor:.4g}"
+        at = f"F = {format_factor(shown.stress_factor)}"
         if shown is not a:
             at += " (the last equilibrium of the strength-reduction search)"
         elif not shown.stable:
@@ -506,8 +520,8 @@ def write_report(
     prog = [
         fig(
             plots.plot_progressive(progressive, unit=unit),
-            "Failure state after each load step and strength-reduction trial "
-            "(first failures by stage).",
+            "Failure history after each load step and strength-reduction trial: the "
+            "joints that have failed by then (first failures by stage), not their state now.",
             "progressive failure frames",
             "fig-progressive",
         )
@@ -536,16 +550,19 @@ def write_report(
         '<h2 id="results">Verdict</h2>',
         _verdict(a, fos),
         '<h2 id="tables">Failed joints and unstable blocks</h2>',
-        f"<h3>Failed joints at {F1}</h3>",
+        f"<h3>Joints at {F1}: state now and failure history</h3>",
+        f'<p class="states">{_esc(_state_counts(a))}.</p>',
         _failed_table(a, stress_unit, max_rows),
         f"<h3>Unstable blocks at {F1}</h3>",
         _unstable_table(a, max_rows),
     ]
     if failed is not None and failed is not a and not _same_state(a, failed):
         sections += [
-            f"<h3>Failed joints at F = {failed.strength_factor:.4g} (failure)</h3>",
+            f"<h3>Joints at F = {format_factor(failed.strength_factor)} (failure): state now "
+            "and failure history</h3>",
+            f'<p class="states">{_esc(_state_counts(failed))}.</p>',
             _failed_table(failed, stress_unit, max_rows),
-            f"<h3>Unstable blocks at F = {failed.strength_factor:.4g} (failure)</h3>",
+            f"<h3>Unstable blocks at F = {format_factor(failed.strength_factor)} (failure)</h3>",
             _unstable_table(failed, max_rows),
         ]
     sections += [

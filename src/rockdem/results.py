@@ -11,6 +11,38 @@ from .solver import System
 from .spring_law import STATE_NAMES, SpringState, strength
 
 
+def format_factor(F: float) -> str:
+    """A strength factor for labels: ``"1"`` for a whole number, else four
+    decimals (``"1.1996"``, never ``"1.2"`` for 1.19958)."""
+    F = float(F)
+    if F == round(F):
+        return f"{F:.0f}"
+    return f"{F:.4f}"
+
+
+#: Current state of a spring point or interface (codes, worst last): never failed
+#: and holding; failed earlier (yielded or broken) but now closed and holding;
+#: at its shear strength now; open now (at or beyond its tensile strength).
+CURRENT_NAMES = ("elastic", "closed-failed-earlier", "sliding", "open")
+#: The same in words, for legends and tables.
+CURRENT_LABELS = ("elastic", "failed earlier, now closed", "sliding", "open")
+#: A closed point slides when its shear stress is within this share of its strength.
+SLIDING_SHARE = 1e-6
+
+
+def current_state(sigma, tau, strength, is_open, failed) -> np.ndarray:
+    """Current state codes (see :data:`CURRENT_NAMES`) of spring points.
+
+    ``strength`` is the shear strength at the factor of the stresses;
+    ``failed`` the committed failure flags (yielded or broken).  A point is
+    sliding when closed with its shear stress at its strength (within
+    :data:`SLIDING_SHARE`), whatever its history.
+    """
+    strength = np.asarray(strength)
+    sliding = ~is_open & (strength > 0) & (np.abs(tau) >= (1 - SLIDING_SHARE) * strength)
+    return np.where(is_open, 3, np.where(sliding, 2, np.where(failed, 1, 0)))
+
+
 @dataclass(frozen=True, eq=False)
 class Evidence:
     """Why a solve was judged converged or failed."""
@@ -80,6 +112,13 @@ class SpringResults:
     #: were evaluated with (``capacity`` is at full strength, F = 1); None in
     #: results made before it was recorded
     strength: np.ndarray | None = None
+    #: current state codes (:data:`CURRENT_NAMES`); ``state`` is the history
+    current: np.ndarray | None = None
+
+    @property
+    def current_name(self) -> np.ndarray:
+        """Current state of every point: elastic, closed-failed-earlier, sliding, open."""
+        return np.asarray(CURRENT_NAMES)[self.current]
 
     @property
     def local_fos(self) -> np.ndarray:
@@ -107,6 +146,17 @@ class InterfaceResults:
     failed_fraction: np.ndarray  # fraction of the length that has failed
     local_fos: np.ndarray
     first_failure: np.ndarray  # -1 if never failed
+    #: current state code of most of the length (ties: the worse state);
+    #: ``state`` and ``failed_fraction`` are the history
+    current: np.ndarray | None = None
+    #: fraction of the length open now, and sliding now
+    open_fraction: np.ndarray | None = None
+    sliding_fraction: np.ndarray | None = None
+
+    @property
+    def current_name(self) -> np.ndarray:
+        """Current state: elastic, closed-failed-earlier, sliding or open."""
+        return np.asarray(CURRENT_NAMES)[self.current]
 
     @property
     def normal_stress(self) -> np.ndarray:
@@ -285,6 +335,9 @@ def tabulate(system: System, state: SpringState, resp, strength_factor: float, r
     springs = system.springs
     c, tan_phi, _ = strength(springs, state, 1.0, reduce_tensile)
     cap = np.where(resp.open, 0.0, np.maximum(c + resp.sigma * tan_phi, 0.0))
+    now = current_state(
+        resp.sigma, resp.tau, resp.capacity, resp.open, state.yielded | state.broken
+    )
     sp_res = SpringResults(
         springs.interface,
         springs.point,
@@ -294,6 +347,7 @@ def tabulate(system: System, state: SpringState, resp, strength_factor: float, r
         state.state,
         state.first_failure,
         resp.capacity,
+        now,
     )
     faces = system.interfaces
     m = springs.points_per_interface
@@ -321,5 +375,25 @@ def tabulate(system: System, state: SpringState, resp, strength_factor: float, r
         failed_len / length,
         fos,
         first,
+        *_current_by_length(now.reshape(-1, m), w, length),
     )
     return sp_res, if_res
+
+
+def _current_by_length(now: np.ndarray, w: np.ndarray, length: np.ndarray):
+    """Interface current state, open and sliding fractions, from point codes
+    ``(n, m)`` and weights.
+
+    Open, sliding or holding, by most of the length (ties to the worse);
+    a holding interface is ``closed-failed-earlier`` if any point of it has
+    failed earlier and is closed and holding now, else ``elastic`` (its
+    history, ``state``, may still show a failure of a minor part).
+    """
+    if not len(length):
+        z = np.zeros(0)
+        return np.zeros(0, dtype=int), z, z
+    share = np.stack([(w * (now == k)).sum(1) for k in range(4)], axis=1) / length[:, None]
+    three = np.column_stack([share[:, 3], share[:, 2], share[:, 0] + share[:, 1]])
+    top = np.argmax(three >= three.max(1, keepdims=True) * (1 - 1e-9), axis=1)
+    current = np.choose(top, [3, 2, np.where((now == 1).any(1), 1, 0)])
+    return current, share[:, 3], share[:, 2]

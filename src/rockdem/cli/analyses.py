@@ -104,11 +104,23 @@ def _print_run(doc: dict[str, Any], result) -> None:
         out.print(f"proof: {_PROOF[doc['proof']]}")
     blocks = doc["unstable_blocks"]
     out.print(f"unstable blocks ({len(blocks)}): " + (_ids(blocks) if blocks else "none"))
+    _print_states(doc["interface_states"])
     failed = doc["failed_interfaces"]
-    out.print(f"failed joints ({len(failed)})" + (":" if failed else ": none"))
+    out.print(
+        f"failure history: {_plural(len(failed), 'interface')} failed at some time"
+        + (" (history; 'now' is the current state):" if failed else ": none")
+    )
     if failed:
         table = Table(
-            "interface", "blocks", "kind", "state", "failed", "first step", box=None, pad_edge=False
+            "interface",
+            "blocks",
+            "kind",
+            "failed in",
+            "failed",
+            "now",
+            "first step",
+            box=None,
+            pad_edge=False,
         )
         for row in failed[:30]:
             table.add_row(
@@ -117,6 +129,7 @@ def _print_run(doc: dict[str, Any], result) -> None:
                 escape(row["kind"]),
                 row["state"],
                 f"{100 * row['failed_fraction']:.0f}%",
+                _NOW[row["current_state"]],
                 str(row["first_failure"]),
             )
         out.print(table)
@@ -130,6 +143,27 @@ def _print_run(doc: dict[str, Any], result) -> None:
         ]
         more = len(doc["slip_surface"]) - len(parts)
         out.print("slip surface: " + ", ".join(parts) + (f", ... ({more} more)" if more else ""))
+
+
+#: current states in words (rockdem.results.CURRENT_NAMES -> CURRENT_LABELS)
+_NOW = {
+    "elastic": "closed",
+    "closed-failed-earlier": "closed",
+    "sliding": "[red]sliding[/red]",
+    "open": "[blue]open[/blue]",
+}
+
+
+def _print_states(states: dict[str, dict[str, int]]) -> None:
+    """The current state of the joints, apart from their failure history."""
+    now = states["now"]
+    total = sum(now.values())
+    out.print(
+        f"joints now ({_plural(total, 'interface')}, each by most of its length): "
+        f"{now['sliding']} sliding, {now['open']} open, "
+        f"{now['closed-failed-earlier']} failed earlier and now closed, "
+        f"{now['elastic']} elastic"
+    )
 
 
 def fos(

@@ -31,6 +31,12 @@ OKABE_ITO = {
 #: Shear failure is red (Okabe-Ito vermillion), tension failure blue, elastic grey.
 STATE_COLORS = ("#9a9a9a", OKABE_ITO["vermillion"], OKABE_ITO["blue"])
 STATE_LABELS = ("elastic", "shear-yielded", "tension-failed")
+#: Current state (rockdem.results.CURRENT_NAMES): elastic grey, failed earlier and
+#: now closed green dashed (history, holding now: not a present failure), sliding
+#: red, open blue.
+CURRENT_COLORS = ("#9a9a9a", OKABE_ITO["bluish_green"], OKABE_ITO["vermillion"], OKABE_ITO["blue"])
+CURRENT_STYLES = ("solid", (0, (2.0, 1.2)), "solid", "solid")
+CURRENT_WIDTHS = (1.0, 2.0, 2.2, 2.2)
 #: Joint-set colours: the palette without vermillion (reserved for shear failure).
 JOINT_COLORS = (
     OKABE_ITO["blue"],
@@ -201,6 +207,23 @@ def oriented_mechanism(a) -> np.ndarray:
     if f is not None and np.sum(np.asarray(f) * mech) < 0:
         return -mech
     return mech
+
+
+def point_segments(system: System) -> np.ndarray:
+    """The stretch of interface each spring point stands for, ``(n_springs, 2, 2)``.
+
+    Points run from the interface's start to its end; each stretch is as
+    long as the point's quadrature weight, so the stretches tile the interface.
+    """
+    f, sp = system.interfaces, system.springs
+    m = sp.points_per_interface
+    w = sp.weight.reshape(-1, m)
+    hi = np.cumsum(w, axis=1) / w.sum(axis=1, keepdims=True)
+    lo = hi - w / w.sum(axis=1, keepdims=True)
+    d = (f.end - f.start)[:, None, :]
+    a = f.start[:, None, :] + lo[..., None] * d
+    b = f.start[:, None, :] + hi[..., None] * d
+    return np.stack([a, b], axis=2).reshape(-1, 2, 2)
 
 
 def segments(system: System, which=None) -> np.ndarray:

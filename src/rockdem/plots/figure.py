@@ -52,8 +52,8 @@ def make_figure(model_or_result, what: str, **options) -> Figure:
         # a stable slope fails at its factor of safety: show that mechanism
         obj = _fos(obj)
     a = c.as_analysis(obj)
-    if what == "failure":
-        return plot_failure(a, **options).figure
+    if what == "failure":  # the search itself: the title names the factor of safety too
+        return plot_failure(obj if isinstance(obj, FactorOfSafety) else a, **options).figure
     if what == "deformed":
         return plot_deformed(a, **options).figure
     if what == "mechanism":

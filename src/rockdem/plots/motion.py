@@ -10,6 +10,7 @@ from matplotlib.collections import LineCollection, PolyCollection
 from matplotlib.colors import Normalize
 from matplotlib.lines import Line2D
 
+from ..results import format_factor
 from . import _common as c
 from .model import draw_blocks
 
@@ -161,18 +162,19 @@ def plot_deformed(
             top = float(size.max())
             where = deformed_state(a)
             if where is None:
-                at = f"F = {a.strength_factor:.4g}, no equilibrium found"
+                at = f"F = {format_factor(a.strength_factor)}, no equilibrium found"
             elif a.stable:
-                at = f"F = {where[0]:.4g}"
+                at = f"F = {format_factor(where[0])}"
             else:
-                at = f"the last equilibrium, F = {where[0]:.4g}, load factor {where[1]:.3g}"
+                F, lam = format_factor(where[0]), where[1]
+                at = f"the last equilibrium, F = {F}, load factor {lam:.3g}"
             title = (
                 f"Deformed shape at {at}: displacements magnified x{mag:g} "
                 f"(largest {top:.3g} {unit})"
             )
         else:
             title = (
-                f"Failure mechanism at F = {a.strength_factor:.4g}: how the blocks move "
+                f"Failure mechanism at F = {format_factor(a.strength_factor)}: how the blocks move "
                 f"(direction, drawn x{mag:g})"
             )
     ax.set_title(title, fontsize=10)

@@ -12,6 +12,7 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
+from ..results import CURRENT_LABELS, CURRENT_NAMES, format_factor
 from . import _common as c
 from .model import draw_block_ids, draw_blocks
 
@@ -46,9 +47,8 @@ class Frame:
     @property
     def label(self) -> str:
         """A short caption, for example ``"step 3: load x0.6, F = 1"``."""
-        text = (
-            f"step {self.index + 1}: load x{self.load_factor:.3g}, F = {self.strength_factor:.4g}"
-        )
+        F = format_factor(self.strength_factor)
+        text = f"step {self.index + 1}: load x{self.load_factor:.3g}, F = {F}"
         return text if self.converged else text + " (no equilibrium)"
 
 
@@ -102,32 +102,43 @@ def plot_failure(
     title: str | None = None,
     legend: bool = True,
     scale_bar: bool = True,
+    current: bool = True,
 ) -> Axes:
-    """Draw the failure state: interfaces by state, the slip surface, unstable blocks.
+    """Draw the failure state: joints by state, the slip surface, unstable blocks.
 
-    Interfaces are coloured by their worst spring state: elastic grey,
-    shear-yielded red (vermillion), tension-failed blue.  The slip surface is
-    a wide purple band under them; the blocks that move in the failure
+    The last step shows the *current* state of every joint, stretch by
+    stretch (each spring point's share of its interface): sliding red
+    (vermillion), open blue, failed earlier but now closed and holding green
+    dashed (history, not a present failure), elastic grey.  Earlier
+    steps (and ``current=False``) show the failure *history* by then: yielded
+    in shear red, failed in tension blue, per interface.  The slip surface
+    is a wide purple band under them; the blocks that move in the failure
     mechanism are shaded orange.
 
     Parameters
     ----------
     result : Analysis, FactorOfSafety or Model
         A model is analysed first; a factor of safety shows its failed
-        analysis (the mechanism just above the factor of safety).
+        analysis (its title names that analysis's factor and the factor of
+        safety apart).
     ax : Axes, optional
     step : int, optional
         Show the state after ``analysis.steps[step]`` (default: the last).
         The slip surface and unstable blocks are drawn at the last step only.
     block_ids, unit, title, legend, scale_bar :
         Display options.
+    current : bool
+        At the last step, the current state (default) or the history.
 
     Returns
     -------
     Axes
-        LineCollections with gids ``"interfaces-elastic"``,
-        ``"interfaces-shear"``, ``"interfaces-tension"`` (one segment per
-        interface), ``"slip-surface"``; PolyCollection ``"unstable"``.
+        Current state: LineCollections with gids ``"interfaces-elastic"``,
+        ``"interfaces-closed-failed-earlier"``, ``"interfaces-sliding"``,
+        ``"interfaces-open"`` (one segment per spring point's stretch).
+        History: ``"interfaces-elastic"``, ``"interfaces-shear"``,
+        ``"interfaces-tension"`` (one segment per interface).  Always
+        ``"slip-surface"``; PolyCollection ``"unstable"``.
     """
     a = c.as_analysis(result)
     fos = result if isinstance(result, c.FactorOfSafety) else None
@@ -136,7 +147,7 @@ def plot_failure(
     ax = c.new_axes(ax)
     fr = frames(a)
     frame = fr[-1 if step is None else step]
-    state = frame.interface_state if not frame.final else a.interfaces.state
+    now = current and frame.final and a.springs.current is not None
     draw_blocks(ax, blocks)
     if frame.final and a.unstable.any():
         verts = [blocks.outline(i) for i in np.flatnonzero(a.unstable)]
@@ -163,17 +174,11 @@ def plot_failure(
                 gid="slip-surface",
             )
         )
-    for s, name in enumerate(("elastic", "shear", "tension")):
-        sel = state == s
-        ax.add_collection(
-            LineCollection(
-                seg[sel],
-                colors=c.STATE_COLORS[s],
-                linewidths=1.0 if s == 0 else 2.2,
-                zorder=3 + s,
-                gid=f"interfaces-{name}",
-            )
-        )
+    handles = (
+        _draw_current(ax, a)
+        if now
+        else _draw_history(ax, seg, a.interfaces.state if frame.final else frame.interface_state)
+    )
     if block_ids:
         draw_block_ids(ax, blocks, free_only=True)
     c.setup_space_axes(ax, blocks, unit, scale_bar=scale_bar)
@@ -181,25 +186,6 @@ def plot_failure(
         title = state_title(a, fos) if frame.final else f"Failure state: {frame.label}"
     ax.set_title(title)
     if legend:
-        handles = [
-            Line2D(
-                [], [], color=c.STATE_COLORS[0], lw=1.0, label=f"elastic ({(state == 0).sum()})"
-            ),
-            Line2D(
-                [],
-                [],
-                color=c.STATE_COLORS[1],
-                lw=2.2,
-                label=f"shear-yielded ({(state == 1).sum()})",
-            ),
-            Line2D(
-                [],
-                [],
-                color=c.STATE_COLORS[2],
-                lw=2.2,
-                label=f"tension-failed ({(state == 2).sum()})",
-            ),
-        ]
         if frame.final and len(a.slip_surface):
             handles.append(
                 Line2D([], [], color=c.SLIP_COLOR, lw=6, alpha=0.6, label="slip surface")
@@ -212,15 +198,77 @@ def plot_failure(
                     label=f"unstable blocks ({int(a.unstable.sum())})",
                 )
             )
-        ax.legend(handles=handles, loc="upper right", fontsize=7, framealpha=0.9)
+        ax.legend(
+            handles=handles,
+            loc="upper right",
+            fontsize=7,
+            framealpha=0.9,
+            title="joints now (interfaces)" if now else "failure history (interfaces)",
+            title_fontsize=7,
+        )
     return ax
+
+
+def _draw_current(ax: Axes, a) -> list:
+    """Each spring point's stretch in the colour of its current state; legend handles
+    counting interfaces by the state of most of their length."""
+    pieces = c.point_segments(a.system)
+    code = np.asarray(a.springs.current)
+    counts = np.bincount(a.interfaces.current, minlength=len(CURRENT_NAMES))
+    handles = []
+    for k, name in enumerate(CURRENT_NAMES):
+        style = {
+            "colors": c.CURRENT_COLORS[k],
+            "linewidths": c.CURRENT_WIDTHS[k],
+            "linestyles": c.CURRENT_STYLES[k],
+        }
+        ax.add_collection(
+            LineCollection(pieces[code == k], zorder=3 + k, gid=f"interfaces-{name}", **style)
+        )
+        handles.append(
+            Line2D(
+                [],
+                [],
+                color=c.CURRENT_COLORS[k],
+                lw=c.CURRENT_WIDTHS[k],
+                ls=c.CURRENT_STYLES[k],
+                label=f"{CURRENT_LABELS[k]} ({counts[k]})",
+            )
+        )
+    return handles
+
+
+#: Legend labels of the failure history (``Analysis.interfaces.state``).
+HISTORY_LABELS = ("never failed", "yielded in shear", "failed in tension")
+
+
+def _draw_history(ax: Axes, seg: np.ndarray, state: np.ndarray) -> list:
+    """Interfaces by their failure history (worst flag so far); legend handles."""
+    labels = HISTORY_LABELS
+    handles = []
+    for s, name in enumerate(("elastic", "shear", "tension")):
+        sel = state == s
+        lw = 1.0 if s == 0 else 2.2
+        ax.add_collection(
+            LineCollection(
+                seg[sel],
+                colors=c.STATE_COLORS[s],
+                linewidths=lw,
+                zorder=3 + s,
+                gid=f"interfaces-{name}",
+            )
+        )
+        handles.append(
+            Line2D([], [], color=c.STATE_COLORS[s], lw=lw, label=f"{labels[s]} ({sel.sum()})")
+        )
+    return handles
 
 
 def state_title(a, fos=None) -> str:
     """``"Failure state at F = 0.9123: unstable (factor of safety 0.825)"``: the
     factor is the one the analysis reports, the factor of safety is named
     beside it, never implied."""
-    title = f"Failure state at F = {a.strength_factor:.4g}: {a.verdict}"
+    title = f"Failure state at F = {format_factor(a.strength_factor)}: {a.verdict}"
     if fos is not None and fos.value is not None:
         title += f" (factor of safety {fos.value:.3f})"
     return title
@@ -255,7 +303,16 @@ def plot_progressive(
     fig = Figure(figsize=(figwidth, height), layout="constrained")
     axes = fig.subplots(nrows, ncols, squeeze=False)
     for ax, k in zip(axes.flat, chosen, strict=False):
-        plot_failure(a, ax=ax, step=k, unit=unit, title=fr[k].label, legend=False, scale_bar=False)
+        plot_failure(
+            a,
+            ax=ax,
+            step=k,
+            unit=unit,
+            title=fr[k].label,
+            legend=False,
+            scale_bar=False,
+            current=False,
+        )
         ax.title.set_fontsize(8)
         ax.tick_params(labelsize=7)
         ax.xaxis.label.set_fontsize(7)
@@ -265,7 +322,7 @@ def plot_progressive(
     fig.legend(
         handles=[
             Line2D([], [], color=col, lw=2, label=lab)
-            for col, lab in zip(c.STATE_COLORS, c.STATE_LABELS, strict=True)
+            for col, lab in zip(c.STATE_COLORS, HISTORY_LABELS, strict=True)
         ]
         + [
             Line2D([], [], color=c.SLIP_COLOR, lw=6, alpha=0.6, label="slip surface"),
@@ -275,7 +332,7 @@ def plot_progressive(
         ncols=5,
         fontsize=8,
     )
-    fig.suptitle("Progressive failure")
+    fig.suptitle("Progressive failure: which joints have failed by each step (history)")
     return fig
 
 
@@ -315,7 +372,7 @@ def animate_progressive(
                 if not frame.final
                 else (f"{frame.label} - {'stable' if a.stable else 'unstable'}")
             )
-            plot_failure(a, ax=ax, step=k, unit=unit, title=title)
+            plot_failure(a, ax=ax, step=k, unit=unit, title=title, current=False)
             repeat = 1 + (hold if frame.final else 0)
             for _ in range(repeat):
                 writer.grab_frame()

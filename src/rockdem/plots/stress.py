@@ -9,6 +9,7 @@ import numpy as np
 from matplotlib.collections import LineCollection
 from matplotlib.figure import Figure
 
+from ..results import CURRENT_LABELS, CURRENT_NAMES, format_factor
 from . import _common as c
 from .model import draw_blocks
 
@@ -154,8 +155,11 @@ def plot_joint_stress(
         Left: the model with the chosen path (LineCollection gid ``"path"``);
         right, sharing the position axis: normal stress (compression positive,
         Line2D gid ``"sigma"``) and shear stress magnitude with the shear
-        strength (gids ``"tau"``, ``"strength"``); failed points marked
-        (red: shear, blue: tension; gids ``"failed-shear"``, ``"failed-tension"``).
+        strength at the factor of the stresses (gids ``"tau"``, ``"strength"``);
+        points marked by their current state (red: sliding, blue: open, green
+        squares: failed earlier, now closed; gids ``"now-sliding"``,
+        ``"now-open"``, ``"now-closed-failed-earlier"``).  A factor of safety
+        shows its last equilibrium (the stable end of the bracket).
     """
     a = stress_analysis(result)
     chosen = select_interfaces(a, joint, interfaces)
@@ -207,22 +211,24 @@ def plot_joint_stress(
         "--",
         color=c.OKABE_ITO["bluish_green"],
         gid="strength",
-        label=f"shear strength at F = {F:.4g}",
+        label=f"shear strength at F = {format_factor(F)}",
     )
-    for st, name in ((1, "shear"), (2, "tension")):
-        m = sp.state[s] == st
+    now = sp.current[s] if sp.current is not None else None
+    marks = ((2, "o"), (3, "o"), (1, "s")) if now is not None else ()
+    for code, marker in marks:
+        m = now == code
         if not m.any():
             continue
         ax_t.plot(
             x[m],
             np.abs(sp.tau[s][m]),
-            "o",
+            marker,
             ms=6,
             mfc="none",
             mew=1.5,
-            color=c.STATE_COLORS[st],
-            gid=f"failed-{name}",
-            label=f"{c.STATE_LABELS[st]} point",
+            color=c.CURRENT_COLORS[code],
+            gid=f"now-{CURRENT_NAMES[code]}",
+            label=f"{CURRENT_LABELS[code]} now" if code > 1 else CURRENT_LABELS[code],
         )
     ax_t.axhline(0.0, color="#999999", lw=0.6)
     ax_t.set_ylabel(f"τ ({stress_unit})")
@@ -232,7 +238,7 @@ def plot_joint_stress(
         state = "" if a.stable else "; no equilibrium: the solver's last iterate"
         title = (
             f"Stress along {path_text(a, path)} from point 0 "
-            f"({len(path.interfaces)} interfaces, F = {F:.4g}{state})"
+            f"({len(path.interfaces)} interfaces, F = {format_factor(F)}{state})"
         )
     fig.suptitle(title, fontsize=11)
     return fig

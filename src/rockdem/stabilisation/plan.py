@@ -11,7 +11,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from ..model import Model
-from ..results import FactorOfSafety
+from ..results import FactorOfSafety, format_factor
 from . import _edit
 from .measures import MeasureComparison, compare_measures
 from .removal import Stabilisation, describe, meets, rate, stabilise
@@ -175,7 +175,7 @@ def save_pictures(result: Study | Stabilisation, folder, *, dpi: int = 110) -> l
             fig, ax = plt.subplots(figsize=(8, 5))
             plot_failure(s.analysis, ax=ax, title=f"stage {s.number}: {s.name} "
                          f"({'stable' if s.stable else 'unstable'} at "
-                         f"F = {s.analysis.strength_factor:.4g}, "
+                         f"F = {format_factor(s.analysis.strength_factor)}, "
                          f"{len(s.new_failures)} joints failed in this stage)")
             fig.tight_layout()
             path = folder / f"stage-{s.number:02d}.png"
@@ -199,7 +199,7 @@ def trial_picture(trial, original: Model, target: float, *, ax=None, title: str 
     if title is None:
         title = (f"trial {trial.number}: {trial.label}\n{len(trial.removed_blocks)} blocks "
                  f"removed (area {trial.removed_area:.2f}), FS {describe(trial.fos)}, "
-                 f"target {target:g}; state shown at F = {shown.strength_factor:.4g}")
+                 f"target {target:g}; state shown at F = {format_factor(shown.strength_factor)}")
     ax = plot_failure(shown, ax=ax, title=title)
     b = original.blocks
     removed = [v for v, i in zip(b.polygons(), b.ids, strict=True) if int(i) in
