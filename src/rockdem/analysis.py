@@ -21,7 +21,7 @@ from scipy.sparse.csgraph import connected_components
 from .certificate import certificate_for, prove_failed_trial, prove_in_region, with_certificate
 from .linalg import factorize, norm
 from .model import Model
-from .relaxation import confirm_failed_trial
+from .relaxation import confirm_failed_analysis, confirm_failed_trial
 from .results import Analysis, Evidence, FactorOfSafety, Step, Trial, tabulate
 from .solver import Solve, System, build_system, residual, solve_equilibrium
 from .spring_law import SpringState, commit
@@ -309,7 +309,8 @@ def analyse(
         if not sol.converged:
             log.info("load step %d/%d: no equilibrium (%s)", k, n_steps, ev)
             failed = _package(system, sol, state, lam_prev, strength_factor, False, steps, q)
-            return prove_in_region(system, failed, state, strength_factor)
+            failed = prove_in_region(system, failed, state, strength_factor)
+            return confirm_failed_analysis(system, failed, state, q, lam)
     return _package(system, sol, state, lam_prev, strength_factor, True, steps, q)
 
 

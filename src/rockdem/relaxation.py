@@ -26,7 +26,7 @@ proof; the proof is the LP of :mod:`rockdem.certificate`.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -40,9 +40,10 @@ MECHANISM_TEXT = "dynamic relaxation: mechanism"
 #: steps of one run (bounded work: each step is two sparse products)
 MAX_STEPS = 4_000
 #: out-of-balance force, as a share of the loads, that counts as equilibrium
-TOLERANCE = 1e-5
+TOLERANCE = 1e-7
 #: a failed strength trial is confirmed this far beyond the top of its bracket
-CONFIRM_MARGIN = 0.02
+#: (the next margin only if the first leaves it undecided)
+CONFIRM_MARGINS = (0.02, 0.05)
 #: still failing at the end if, over the last quarter of the run, some block
 #: moved more than its elastic response ...
 MECHANISM_MOTION = 1.0
@@ -121,27 +122,43 @@ def relax(
     return Relaxation(status, q, step, float(ratio), motion)
 
 
+def confirm_failed_analysis(system, failed, state, q, load_factor: float):
+    """A failed staged analysis that the LP could not prove, checked by dynamic
+    relaxation at the load it failed to carry, from its last equilibrium
+    (``state``, ``q``): the statement goes into its evidence."""
+    if failed.evidence.certified:
+        return failed
+    run = relax(system, state, load_factor, failed.strength_factor, q)
+    return _with_relaxation(failed, f"{run} at load factor {load_factor:.4g}")
+
+
 def confirm_failed_trial(system, failed, base, factor: float, trials):
     """A failed strength trial that the LP could not prove, checked by dynamic
-    relaxation a little beyond the limit (``factor x (1 + CONFIRM_MARGIN)``),
+    relaxation a little beyond the limit (``factor x (1 + margin)``),
     from the last stable trial ``base``: a mechanism there is stated in the
     failed trial's evidence (proof ``"dynamic-relaxation"``).  Right at the
     limit the excess force is too small for the blocks to move visibly."""
-    from dataclasses import replace
-
-    last = failed.steps[-1]
-    if last.evidence.certified:
+    if failed.evidence.certified:
         return failed, trials
     asm = system.assembly
     free = ~system.blocks.fixed
     q0 = np.zeros(asm.n_dof)
     q0[asm.dof[free].ravel()] = base.displacement[free].ravel()
-    beyond = factor * (1.0 + CONFIRM_MARGIN)
-    run = relax(system, base.state.without_slip(), base.load_factor, beyond, q0)
-    text = f"{run} at F = {beyond:.6g} ({CONFIRM_MARGIN:.0%} beyond the bracket)"
-    ev = replace(last.evidence, relaxation=text)
-    failed = replace(failed, steps=(*failed.steps[:-1], replace(last, evidence=ev)))
+    for margin in CONFIRM_MARGINS:
+        beyond = factor * (1.0 + margin)
+        run = relax(system, base.state.without_slip(), base.load_factor, beyond, q0)
+        if run.status == "mechanism":
+            break
+    text = f"{run} at F = {beyond:.6g} ({margin:.0%} beyond the bracket)"
+    failed = _with_relaxation(failed, text)
     trials = list(trials)
     last_failed = max(i for i, t in enumerate(trials) if not t.stable)
-    trials[last_failed] = replace(trials[last_failed], evidence=ev)
+    trials[last_failed] = replace(trials[last_failed], evidence=failed.evidence)
     return failed, trials
+
+
+def _with_relaxation(failed, text: str):
+    """``failed`` (an Analysis) with ``text`` as its last step's relaxation evidence."""
+    last = failed.steps[-1]
+    ev = replace(last.evidence, relaxation=text)
+    return replace(failed, steps=(*failed.steps[:-1], replace(last, evidence=ev)))
