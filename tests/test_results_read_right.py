@@ -240,3 +240,222 @@ def test_run_prints_the_state_now_apart_from_the_history():
     assert "failed joints (" not in text
     now_line = next(ln for ln in text.splitlines() if ln.startswith("joints now"))
     assert "failed earlier and now closed" in now_line
+
+
+# ------------------------------------------------------- a mode per block
+def plane_model(dip, phi, b, h, *, step=False):
+    """A b x h block on a fixed plane dipping ``dip`` degrees toward -x (unit weight 25)."""
+    d = np.radians(dip)
+    R = np.array([[np.cos(d), -np.sin(d)], [np.sin(d), np.cos(d)]])
+    ground = np.array([(-6, -2), (6, -2), (6, 0), (-6, 0)]) @ R.T
+    block = np.array([(0, 0), (b, 0), (b, h), (0, h)]) @ R.T
+    return rd.Model(
+        rd.Blocks.from_polygons([ground, block], fixed=[True, False], unit_weight=25),
+        rd.Joint(normal_stiffness=1e6, friction_angle=phi),
+    )
+
+
+def step_model(left, right, h=2.0):
+    """A block from x = ``left`` to ``right`` (height h) standing on the upper level
+    of a step whose corner is at (0, 0); the lower level is 1 below."""
+    ground = [(-4, -2), (4, -2), (4, -1), (0, -1), (0, 0), (-4, 0)]
+    block = [(left, 0), (right, 0), (right, h), (left, h)]
+    assert left < 0 < right
+    return rd.Model(
+        rd.Blocks.from_polygons([ground, block], fixed=[True, False], unit_weight=25),
+        rd.Joint(normal_stiffness=1e6, friction_angle=40),
+    )
+
+
+@pytest.mark.parametrize(
+    ("dip", "phi", "b", "h", "mode"),
+    [
+        (30, 20, 2.0, 1.0, "slides"),  # tan 30 > tan 20, b/h = 2 > tan 30
+        (20, 35, 0.25, 1.0, "topples"),  # tan 20 < tan 35, b/h = 0.25 < tan 20
+        (20, 35, 1.0, 1.0, "stable"),  # tan 20 < tan 35, b/h = 1 > tan 20
+    ],
+)
+def test_block_on_a_plane_slides_topples_or_stands_as_the_kinematic_criteria_say(
+    dip, phi, b, h, mode
+):
+    """A block of width b and height h on a plane dipping psi, friction phi.
+
+    Kinematic criteria of Goodman & Bray (1976) and Wyllie & Mah (2004),
+    Rock Slope Engineering, 4th ed., ch. 9 (after Hoek & Bray 1981): the block
+    slides if tan(psi) > tan(phi) and b/h > tan(psi); it topples about its
+    downslope base corner if b/h < tan(psi) (and tan(psi) < tan(phi)); it
+    stands if b/h > tan(psi) and tan(psi) < tan(phi).
+    """
+    from rockdem.modes import failure_modes
+
+    a = rd.analyse(plane_model(dip, phi, b, h))
+    modes = failure_modes(a)
+    assert a.stable == (mode == "stable")
+    assert modes.name[1] == mode and modes.name[0] == "stable"
+    if mode == "topples":  # about the downslope corner of the base, at the origin
+        assert np.allclose(modes.pivot[1], (0.0, 0.0), atol=1e-6)
+    else:
+        assert np.isnan(modes.pivot[1]).all()
+
+
+@pytest.mark.parametrize(("left", "right", "mode"), [(-0.4, 0.8, "topples"), (-0.8, 0.4, "stable")])
+def test_tall_block_on_a_step_topples_when_its_weight_acts_beyond_the_corner(left, right, mode):
+    """A 2 m tall block standing on the edge of a step, friction 40 degrees:
+    it overturns about the step corner exactly when its centroid lies beyond
+    the corner (the moment of its weight about the corner turns it over;
+    Goodman & Bray 1976, toppling about the toe of a column)."""
+    from rockdem.modes import failure_modes
+
+    a = rd.analyse(step_model(left, right))
+    modes = failure_modes(a)
+    assert modes.name[1] == mode
+    if mode == "topples":
+        assert np.allclose(modes.pivot[1], (0.0, 0.0), atol=1e-6)
+
+
+def test_a_block_under_an_overhang_falls():
+    """A block hanging from a fixed overhang by a joint without tensile strength
+    separates from it: it falls."""
+    from rockdem.modes import failure_modes
+
+    roof = [(-3, 2), (3, 2), (3, 3), (-3, 3)]
+    block = [(-1, 1), (1, 1), (1, 2), (-1, 2)]
+    m = rd.Model(
+        rd.Blocks.from_polygons([roof, block], fixed=[True, False], unit_weight=25),
+        rd.Joint(normal_stiffness=1e6, friction_angle=40),
+    )
+    a = rd.analyse(m)
+    assert not a.stable
+    assert failure_modes(a).name[1] == "falls"
+
+
+def _rotate_about(a, point, theta, slide=(0.0, 0.0)):
+    """The analysis with a closed-form mechanism: block 1 turns by ``theta`` about
+    ``point`` and translates by ``slide``."""
+    c = a.system.blocks.centroid[1]
+    mech = np.zeros_like(a.mechanism)
+    mech[1] = (
+        -theta * (c[1] - point[1]) + slide[0],
+        theta * (c[0] - point[0]) + slide[1],
+        theta,
+    )
+    unstable = np.array([False, True])
+    return dataclasses.replace(a, stable=False, mechanism=mech, unstable=unstable)
+
+
+def test_rotation_about_a_slipping_corner_is_slides_and_topples():
+    """Closed-form mechanisms of the tall block on a 20 degree plane: rotation
+    about the downslope corner topples; the same rotation with the corner
+    slipping down the plane slides and topples (Wyllie & Mah 2004, ch. 9: the
+    region b/h < tan(psi), tan(psi) > tan(phi)); a translation along the plane
+    slides; a motion leaving the plane falls."""
+    from rockdem.modes import failure_modes
+
+    a = rd.analyse(plane_model(20, 35, 0.25, 1.0))
+    d = np.radians(20)
+    down = (-np.cos(d), -np.sin(d))  # down the plane (it dips toward -x)
+    up = (-np.sin(d), np.cos(d))  # off the plane
+    theta = 1.0  # counter-clockwise: the block leans over its corner at the origin
+    cases = {
+        "topples": _rotate_about(a, (0, 0), theta),
+        "slides and topples": _rotate_about(a, (0, 0), theta, (0.5 * down[0], 0.5 * down[1])),
+        "slides": _rotate_about(a, (0, 0), 0.0, down),
+        # down the plane and off it (gravity does positive work on it)
+        "falls": _rotate_about(a, (0, 0), 0.0, (down[0] + 0.3 * up[0], down[1] + 0.3 * up[1])),
+    }
+    for mode, case in cases.items():
+        assert failure_modes(case).name[1] == mode, mode
+
+
+# -------------------------------------------------------- model boundaries
+def slab_model():
+    """A slab on the fixed base, against the fixed back wall, pushed toward +x by a
+    seismic coefficient above tan(phi): it slides along the base of the model."""
+    base = [(-10, -2), (10, -2), (10, 0), (-10, 0)]
+    back = [(-10, 0), (-8, 0), (-8, 6), (-10, 6)]
+    slab = [(-8, 0), (0, 0), (0, 4), (-8, 4)]
+    return rd.Model(
+        rd.Blocks.from_polygons([base, back, slab], fixed=[True, True, False], unit_weight=25),
+        rd.Joint(normal_stiffness=1e6, friction_angle=20),
+        loads=rd.Loads(seismic_h=0.5),
+    )
+
+
+def test_mechanism_at_the_fixed_back_and_base_of_the_model_is_named():
+    from rockdem.modes import boundary_contacts
+
+    a = rd.analyse(slab_model())
+    assert not a.stable
+    found = {b.side: b for b in boundary_contacts(a)}
+    assert set(found) == {"back", "base"}
+    assert np.isclose(found["back"].at, -8.0) and np.isclose(found["base"].at, 0.0)
+    assert found["back"].blocks == (2,)
+    text = found["back"].message
+    assert "reaches the fixed back boundary at x = -8" in text and "extend the model" in text
+    assert "y = 0" in found["base"].message
+
+
+def test_no_boundary_warning_where_the_mechanism_stays_inside(layers):
+    from rockdem.modes import boundary_warnings
+
+    _, run, fos = layers
+    assert boundary_warnings(fos.failed_analysis) == []
+    assert boundary_warnings(run) == []
+    # a wedge on inclined planes of one fixed ground block: not a model side
+    w = rd.analyse(wedge(30.0, 25.0, 30.0))
+    assert not w.stable and boundary_warnings(w) == []
+
+
+def test_toppling_example_warns_that_its_mechanism_is_at_the_back_boundary():
+    from rockdem.output import fos_summary
+
+    m = example("toppling")
+    fos = rd.factor_of_safety(m, width=0.01)
+    doc = fos_summary(fos)
+    sides = {c["side"] for c in doc["boundary_contacts"]}
+    assert "back" in sides
+    assert any("back boundary at x = " in w for w in doc["warnings"])
+
+
+SLAB_YAML = """\
+name: slab on the base
+units: kN, m, kPa
+joints:
+  j: {normal_stiffness: 1.0e+6, friction_angle: 20}
+blocks:
+  - {id: 0, fixed: true, vertices: [[-10, -2], [10, -2], [10, 0], [-10, 0]]}
+  - {id: 1, fixed: true, vertices: [[-10, 0], [-8, 0], [-8, 6], [-10, 6]]}
+  - {id: 2, unit_weight: 25, vertices: [[-8, 0], [0, 0], [0, 4], [-8, 4]]}
+loads: {seismic_h: 0.5}
+"""
+
+
+def test_cli_json_csv_and_report_carry_modes_and_boundary_warnings(tmp_path):
+    import csv
+    import json
+
+    from typer.testing import CliRunner
+
+    from rockdem.cli import app
+
+    path = tmp_path / "slab.yaml"
+    path.write_text(SLAB_YAML)
+    runner = CliRunner()
+    r = runner.invoke(app, ["run", str(path)])
+    assert r.exit_code == 0, r.output
+    assert "warning: the mechanism reaches the fixed back boundary at x = -8" in r.stdout
+    assert "slides (1): 2" in r.stdout
+    doc = json.loads(runner.invoke(app, ["run", str(path), "--json"]).stdout)
+    assert doc["failure_modes"] == {"slides": [2]}
+    assert len(doc["warnings"]) == 2 and doc["boundary_contacts"][0]["blocks"] == [2]
+    out = tmp_path / "res"
+    assert runner.invoke(app, ["fos", str(path), "--out", str(out), "-q"]).exit_code == 0
+    with (out / "blocks.csv").open() as fh:
+        rows = {r["id"]: r for r in csv.DictReader(fh)}
+    assert rows["2"]["failure_mode"] == "slides" and rows["0"]["failure_mode"] == "fixed"
+    fos_doc = json.loads((out / "result.json").read_text())
+    assert fos_doc["failure_modes"] == {"slides": [2]} and fos_doc["warnings"]
+    report = write_report(path, tmp_path / "rep", animation=False, image_format="svg")
+    text = report.read_text(encoding="utf-8")
+    assert 'class="warning"' in text and "reaches the fixed back boundary at x = -8" in text
+    assert "Failure modes: 1 slides" in text

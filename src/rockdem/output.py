@@ -38,6 +38,7 @@ from typing import Any
 import numpy as np
 
 from .errors import InputError
+from .modes import MODES, boundary_contacts, failure_modes
 from .results import CURRENT_NAMES
 from .spring_law import STATE_NAMES
 
@@ -51,6 +52,7 @@ __all__ = [
     "check_output_dir",
     "fos_summary",
     "jsonable",
+    "mechanism_summary",
     "state_counts",
     "write_results",
 ]
@@ -77,8 +79,13 @@ def jsonable(value: Any) -> Any:
 
 
 # --------------------------------------------------------------- tables
-def analysis_tables(analysis) -> dict[str, list[dict[str, Any]]]:
+def analysis_tables(analysis, modes=None) -> dict[str, list[dict[str, Any]]]:
     """Rows of the three tables of an :class:`~rockdem.Analysis`.
+
+    ``modes`` (a :class:`~rockdem.modes.BlockModes`, default: those of
+    ``analysis``) fills the blocks' ``failure_mode`` column: for a
+    factor-of-safety search, pass the modes of the failed end (the mechanism
+    at the limit) beside the tables of the last equilibrium.
 
     Returns
     -------
@@ -89,6 +96,7 @@ def analysis_tables(analysis) -> dict[str, list[dict[str, Any]]]:
     system = analysis.system
     b = system.blocks
     d, mech = analysis.displacement, analysis.mechanism
+    mode = np.where(b.fixed, "fixed", (modes or failure_modes(analysis)).name)
     blocks = [
         {
             "id": int(b.ids[i]),
@@ -105,6 +113,7 @@ def analysis_tables(analysis) -> dict[str, list[dict[str, Any]]]:
             "mechanism_x": float(mech[i, 0]),
             "mechanism_y": float(mech[i, 1]),
             "mechanism_rotation": float(mech[i, 2]),
+            "failure_mode": str(mode[i]),
         }
         for i in range(b.n_blocks)
     ]
@@ -197,6 +206,31 @@ def state_counts(analysis) -> dict[str, dict[str, int]]:
     }
 
 
+def mechanism_summary(analysis) -> dict[str, Any]:
+    """What the mechanism does: ``failure_modes`` (ids of the moving blocks by
+    mode), ``boundary_contacts`` (where it touches a fixed side of the model)
+    and ``warnings`` (one sentence each); all empty for a stable analysis."""
+    if analysis is None or analysis.stable:
+        return {"failure_modes": {}, "boundary_contacts": [], "warnings": []}
+    modes = failure_modes(analysis)
+    by_mode = {m: [int(i) for i in modes.blocks(m)] for m in MODES if m != "stable"}
+    contacts = boundary_contacts(analysis)
+    return {
+        "failure_modes": {m: ids for m, ids in by_mode.items() if ids},
+        "boundary_contacts": [
+            {
+                "side": c.side,
+                "at": c.at,
+                "span": list(c.span),
+                "blocks": list(c.blocks),
+                "interfaces": [int(i) for i in c.interfaces],
+            }
+            for c in contacts
+        ],
+        "warnings": [c.message for c in contacts],
+    }
+
+
 def analysis_summary(analysis) -> dict[str, Any]:
     """The verdict of a staged analysis as plain data.
 
@@ -204,7 +238,9 @@ def analysis_summary(analysis) -> dict[str, Any]:
     ``unstable_blocks`` (ids), ``failed_interfaces`` (the history: every
     interface that has failed at some time, with the blocks, kind, state,
     current state and first failure), ``interface_states`` (counts by current
-    state and by history, see :func:`state_counts`), ``slip_surface`` (interface numbers),
+    state and by history, see :func:`state_counts`), ``failure_modes``,
+    ``boundary_contacts`` and ``warnings`` (:func:`mechanism_summary`),
+    ``slip_surface`` (interface numbers),
     ``steps`` and ``evidence``.
     """
     return jsonable(
@@ -216,6 +252,7 @@ def analysis_summary(analysis) -> dict[str, Any]:
             "unstable_blocks": [int(i) for i in analysis.unstable_blocks],
             "failed_interfaces": _failed(analysis),
             "interface_states": state_counts(analysis),
+            **mechanism_summary(analysis),
             "slip_surface": [int(i) for i in analysis.slip_surface],
             "steps": [
                 {
@@ -240,7 +277,9 @@ def fos_summary(fos) -> dict[str, Any]:
 
     ``factor_of_safety`` is None when strength does not control the
     mechanism; an open upper end of ``bracket`` is None (infinity).
-    ``mechanism_blocks`` are the blocks moving at the unstable end.
+    ``mechanism_blocks`` are the blocks moving at the unstable end, with their
+    ``failure_modes``, ``boundary_contacts`` and ``warnings``
+    (:func:`mechanism_summary`).
     """
     failed = fos.failed_analysis
     return jsonable(
@@ -252,6 +291,7 @@ def fos_summary(fos) -> dict[str, Any]:
             "certified_upper_bound": fos.certified_upper_bound,
             "definition": fos.definition,
             "mechanism_blocks": [] if failed is None else [int(i) for i in failed.unstable_blocks],
+            **mechanism_summary(failed),
             "trials": [
                 {
                     "factor": t.factor,
@@ -307,7 +347,7 @@ def _csv_value(v: Any) -> Any:
 _COLUMNS = {
     "blocks": list(
         "id fixed area unit_weight weight centroid_x centroid_y ux uy rotation unstable "
-        "mechanism_x mechanism_y mechanism_rotation".split()
+        "mechanism_x mechanism_y mechanism_rotation failure_mode".split()
     ),
     "interfaces": list(
         "interface block_a block_b kind start_x start_y end_x end_y length normal_force "

@@ -24,6 +24,7 @@ import numpy as np
 from . import plots
 from .analysis import analyse, factor_of_safety
 from .model import Model
+from .modes import boundary_warnings, failure_modes
 from .results import Analysis, FactorOfSafety, format_factor
 
 _CSS = """
@@ -41,6 +42,8 @@ th{background:#eef3f8}td.l,th.l{text-align:left}
 figure{margin:1em 0}figure img{max-width:100%;height:auto;border:1px solid #ddd}
 figcaption{color:#444;font-size:.9em}
 .note{color:#555;font-size:.88em}
+.warning{background:#fff4cc;border:2px solid #E69F00;border-radius:6px;padding:.5em 1em;
+ margin:.5em 0}
 nav a{margin-right:1em}
 """
 
@@ -164,21 +167,22 @@ def _failed_table(a: Analysis, stress_unit: str, limit: int) -> str:
 
 
 def _unstable_table(a: Analysis, limit: int) -> str:
+    """The moving blocks with their failure mode (rockdem.modes) and mechanism motion."""
     blocks = a.system.blocks
     idx = np.flatnonzero(a.unstable)
     if not idx.size:
         return '<p class="note">No block moves (no failure mechanism).</p>'
-    size = np.sqrt(np.abs(blocks.area))
     rows = []
     mech = plots.oriented_mechanism(a)
+    modes = failure_modes(a)
     for i in idx[:limit]:
         ux, uy, rot = mech[i]
-        turn = abs(rot) * size[i]
-        mode = "rotating" if turn > np.hypot(ux, uy) else "sliding"
+        px, py = modes.pivot[i]
         rows.append(
             [
                 int(blocks.ids[i]),
-                mode,
+                str(modes.name[i]),
+                f"({_num(px, '.4g')}, {_num(py, '.4g')})" if np.isfinite(px) else "",
                 _num(blocks.area[i], ".4g"),
                 _num(blocks.weight[i], ".4g"),
                 f"({_num(blocks.centroid[i][0], '.4g')}, {_num(blocks.centroid[i][1], '.4g')})",
@@ -187,9 +191,33 @@ def _unstable_table(a: Analysis, limit: int) -> str:
                 _num(rot, ".3g"),
             ]
         )
-    header = ["block", "motion", "area", "weight", "centroid", "mech. ux", "mech. uy", "mech. rot"]
+    header = [
+        "block",
+        "failure mode",
+        "pivot",
+        "area",
+        "weight",
+        "centroid",
+        "mech. ux",
+        "mech. uy",
+        "mech. rot",
+    ]
     more = f'<p class="note">... and {idx.size - limit} more.</p>' if idx.size > limit else ""
-    return _table(header, rows, left=2, cls="unstable-blocks") + more
+    counts = ", ".join(f"{n} {m}" for m, n in modes.counts().items() if n and m != "stable")
+    lead = f'<p class="modes">Failure modes: {_esc(counts)}.</p>'
+    return lead + _table(header, rows, left=2, cls="unstable-blocks") + more
+
+
+def _warnings(*analyses: Analysis | None) -> str:
+    """A warning box per side of the model the mechanism reaches (rockdem.modes)."""
+    shown: dict[str, str] = {}  # message -> the factor of the first state that gave it
+    for a in analyses:
+        for text in boundary_warnings(a) if a is not None else ():
+            shown.setdefault(text, format_factor(a.strength_factor))
+    return "".join(
+        f'<div class="warning">Warning (mechanism at F = {F}): {_esc(t)}.</div>'
+        for t, F in shown.items()
+    )
 
 
 def _inputs(model: Model, system, units: str | None) -> str:
@@ -549,6 +577,7 @@ def write_report(
         '<a href="#inputs">Inputs</a></nav>',
         '<h2 id="results">Verdict</h2>',
         _verdict(a, fos),
+        _warnings(a, failed),
         '<h2 id="tables">Failed joints and unstable blocks</h2>',
         f"<h3>Joints at {F1}: state now and failure history</h3>",
         f'<p class="states">{_esc(_state_counts(a))}.</p>',

@@ -68,10 +68,13 @@ def run(
         _print_run(doc, result)
 
 
-def _write(folder: Path, analysis, document: dict[str, Any], overwrite: bool, quiet: bool):
+def _write(
+    folder: Path, analysis, document: dict[str, Any], overwrite: bool, quiet: bool, modes=None
+):
     from ..output import analysis_tables, write_results
 
-    files = write_results(folder, analysis_tables(analysis), document, overwrite=overwrite)
+    tables = analysis_tables(analysis, modes)
+    files = write_results(folder, tables, document, overwrite=overwrite)
     if not quiet:
         err.print(f"results written to {escape(str(folder))}/ ({', '.join(f.name for f in files)})")
 
@@ -104,6 +107,7 @@ def _print_run(doc: dict[str, Any], result) -> None:
         out.print(f"proof: {_PROOF[doc['proof']]}")
     blocks = doc["unstable_blocks"]
     out.print(f"unstable blocks ({len(blocks)}): " + (_ids(blocks) if blocks else "none"))
+    _print_mechanism(doc)
     _print_states(doc["interface_states"])
     failed = doc["failed_interfaces"]
     out.print(
@@ -154,6 +158,15 @@ _NOW = {
 }
 
 
+def _print_mechanism(doc: dict[str, Any]) -> None:
+    """Failure mode per block and the model-boundary warnings of a summary."""
+    modes = doc.get("failure_modes") or {}
+    for mode, ids in modes.items():
+        out.print(f"  {mode} ({len(ids)}): {_ids(ids, 20)}")
+    for text in doc.get("warnings") or []:
+        out.print(f"[bold yellow]warning[/bold yellow]: {escape(text)}")
+
+
 def _print_states(states: dict[str, dict[str, int]]) -> None:
     """The current state of the joints, apart from their failure history."""
     now = states["now"]
@@ -178,7 +191,8 @@ def fos(
     """Factor of safety by shear strength reduction: the value and its bracket.
 
     With --out the tables describe the last equilibrium (the stable end of the
-    bracket); result.json also lists the blocks moving at the unstable end.
+    bracket), except the blocks' failure_mode: the mode at the limit (the
+    failed end); result.json also lists the blocks moving at the unstable end.
     """
     with _guard(debug):
         from ..analysis import factor_of_safety
@@ -197,10 +211,13 @@ def fos(
         doc = {**_header(path, m, cfg), "command": "fos", **fos_summary(result)}
         if out_dir is not None:
             state = result.stable_analysis or result.failed_analysis
+            from ..modes import failure_modes
             from ..output import analysis_summary
 
             extra = {"analysis": analysis_summary(state), "model": cfg.model_dump(mode="json")}
-            _write(out_dir, state, {**doc, **extra}, overwrite, quiet or json_)
+            # the tables describe the last equilibrium; failure_mode is the limit's
+            modes = failure_modes(result.failed_analysis) if result.failed_analysis else None
+            _write(out_dir, state, {**doc, **extra}, overwrite, quiet or json_, modes)
         if json_:
             _echo_json(doc)
             return
@@ -229,4 +246,5 @@ def _print_fos(doc: dict[str, Any]) -> None:
     blocks = doc["mechanism_blocks"]
     if blocks:
         out.print(f"mechanism blocks ({len(blocks)}): {_ids(blocks)}")
+    _print_mechanism(doc)
     out.print(f"definition: {escape(doc['definition'])}")

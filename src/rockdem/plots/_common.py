@@ -52,6 +52,14 @@ GROUND_FACE = "#d9d9d9"
 GROUND_EDGE = "#7a7a7a"
 BLOCK_EDGE = "#4d4d4d"
 UNSTABLE_FACE = OKABE_ITO["orange"]
+#: Block faces by failure mode (rockdem.modes.MODES, "stable" unused).
+MODE_FACES = {
+    "slides": OKABE_ITO["orange"],
+    "topples": OKABE_ITO["sky_blue"],
+    "slides and topples": OKABE_ITO["yellow"],
+    "falls": OKABE_ITO["reddish_purple"],
+}
+BOUNDARY_COLOR = OKABE_ITO["black"]
 SLIP_COLOR = OKABE_ITO["reddish_purple"]
 SUPPORT_COLOR = OKABE_ITO["bluish_green"]
 LOAD_COLOR = OKABE_ITO["black"]

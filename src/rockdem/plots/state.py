@@ -12,6 +12,7 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 
+from ..modes import MODES, boundary_contacts, failure_modes
 from ..results import CURRENT_LABELS, CURRENT_NAMES, format_factor
 from . import _common as c
 from .model import draw_block_ids, draw_blocks
@@ -113,7 +114,10 @@ def plot_failure(
     steps (and ``current=False``) show the failure *history* by then: yielded
     in shear red, failed in tension blue, per interface.  The slip surface
     is a wide purple band under them; the blocks that move in the failure
-    mechanism are shaded orange.
+    mechanism are shaded by failure mode (:func:`rockdem.modes.failure_modes`:
+    slides orange, topples sky blue, slides and topples yellow, falls purple),
+    with the pivot corners of toppling blocks dotted and contacts with a
+    fixed side of the model (:func:`rockdem.modes.boundary_contacts`) dash-dotted.
 
     Parameters
     ----------
@@ -138,7 +142,8 @@ def plot_failure(
         ``"interfaces-open"`` (one segment per spring point's stretch).
         History: ``"interfaces-elastic"``, ``"interfaces-shear"``,
         ``"interfaces-tension"`` (one segment per interface).  Always
-        ``"slip-surface"``; PolyCollection ``"unstable"``.
+        ``"slip-surface"``, ``"boundary-contact"``; PolyCollection ``"unstable"``
+        (face colours by mode); Line2D ``"pivots"``.
     """
     a = c.as_analysis(result)
     fos = result if isinstance(result, c.FactorOfSafety) else None
@@ -149,18 +154,9 @@ def plot_failure(
     frame = fr[-1 if step is None else step]
     now = current and frame.final and a.springs.current is not None
     draw_blocks(ax, blocks)
+    mode_handles = []
     if frame.final and a.unstable.any():
-        verts = [blocks.outline(i) for i in np.flatnonzero(a.unstable)]
-        ax.add_collection(
-            PolyCollection(
-                verts,
-                facecolors=c.UNSTABLE_FACE,
-                alpha=0.55,
-                edgecolors="none",
-                zorder=1.5,
-                gid="unstable",
-            )
-        )
+        mode_handles = _draw_modes(ax, a)
     seg = c.segments(system)
     if frame.final and len(a.slip_surface):
         ax.add_collection(
@@ -190,23 +186,75 @@ def plot_failure(
             handles.append(
                 Line2D([], [], color=c.SLIP_COLOR, lw=6, alpha=0.6, label="slip surface")
             )
-        if frame.final and a.unstable.any():
-            handles.append(
-                Patch(
-                    facecolor=c.UNSTABLE_FACE,
-                    alpha=0.55,
-                    label=f"unstable blocks ({int(a.unstable.sum())})",
-                )
-            )
-        ax.legend(
+        handles += mode_handles
+        ax.legend(  # beside the model, not over it
             handles=handles,
-            loc="upper right",
+            loc="upper left",
+            bbox_to_anchor=(1.01, 1.0),
+            borderaxespad=0.0,
             fontsize=7,
             framealpha=0.9,
             title="joints now (interfaces)" if now else "failure history (interfaces)",
             title_fontsize=7,
         )
     return ax
+
+
+def _draw_modes(ax: Axes, a) -> list:
+    """Moving blocks shaded by failure mode, pivots of toppling blocks dotted, the
+    contacts with a fixed side of the model drawn dash-dotted; legend handles."""
+    blocks = a.system.blocks
+    modes = failure_modes(a)
+    moving = np.flatnonzero(a.unstable & ~blocks.fixed)
+    names = modes.name[moving]
+    face = [c.MODE_FACES.get(str(m), c.UNSTABLE_FACE) for m in names]
+    ax.add_collection(
+        PolyCollection(
+            [blocks.outline(i) for i in moving],
+            facecolors=face,
+            alpha=0.6,
+            edgecolors="none",
+            zorder=1.5,
+            gid="unstable",
+        )
+    )
+    handles = [
+        Patch(facecolor=c.MODE_FACES[m], alpha=0.6, label=f"{m} ({int((names == m).sum())})")
+        for m in MODES
+        if m in c.MODE_FACES and (names == m).any()
+    ]
+    piv = modes.pivot[moving]
+    piv = np.unique(piv[np.isfinite(piv).all(1)], axis=0)
+    if len(piv):
+        ax.plot(*piv.T, "o", ms=4, color="black", zorder=7, gid="pivots", ls="none")
+        handles.append(
+            Line2D([], [], marker="o", ms=4, color="black", ls="none", label="toppling pivot")
+        )
+    contacts = boundary_contacts(a)
+    if contacts:
+        seg = c.segments(a.system)
+        hit = np.concatenate([b.interfaces for b in contacts])
+        ax.add_collection(
+            LineCollection(
+                seg[hit],
+                colors=c.BOUNDARY_COLOR,
+                linewidths=3.0,
+                linestyles="dashdot",
+                zorder=2.5,
+                gid="boundary-contact",
+            )
+        )
+        handles.append(
+            Line2D(
+                [],
+                [],
+                color=c.BOUNDARY_COLOR,
+                lw=2.5,
+                ls="dashdot",
+                label="mechanism at the model boundary",
+            )
+        )
+    return handles
 
 
 def _draw_current(ax: Axes, a) -> list:
@@ -319,19 +367,18 @@ def plot_progressive(
         ax.yaxis.label.set_fontsize(7)
     for ax in axes.flat[len(chosen) :]:
         ax.set_axis_off()
-    fig.legend(
-        handles=[
-            Line2D([], [], color=col, lw=2, label=lab)
-            for col, lab in zip(c.STATE_COLORS, HISTORY_LABELS, strict=True)
-        ]
-        + [
-            Line2D([], [], color=c.SLIP_COLOR, lw=6, alpha=0.6, label="slip surface"),
-            Patch(facecolor=c.UNSTABLE_FACE, alpha=0.55, label="unstable blocks"),
-        ],
-        loc="outside lower center",
-        ncols=5,
-        fontsize=8,
-    )
+    moving = failure_modes(a).name[a.unstable & ~a.system.blocks.fixed]
+    handles = [
+        Line2D([], [], color=col, lw=2, label=lab)
+        for col, lab in zip(c.STATE_COLORS, HISTORY_LABELS, strict=True)
+    ]
+    handles.append(Line2D([], [], color=c.SLIP_COLOR, lw=6, alpha=0.6, label="slip surface"))
+    handles += [
+        Patch(facecolor=c.MODE_FACES[m], alpha=0.6, label=f"block {m}")
+        for m in MODES
+        if m in c.MODE_FACES and (moving == m).any()
+    ]
+    fig.legend(handles=handles, loc="outside lower center", ncols=min(len(handles), 6), fontsize=8)
     fig.suptitle("Progressive failure: which joints have failed by each step (history)")
     return fig
 
