@@ -20,18 +20,29 @@ def stabilise(
     ] = None,
     example: Annotated[
         str | None,
-        typer.Option("--example", "-e", help="Use a bundled example instead of a file.",
-                     metavar="NAME"),
+        typer.Option(
+            "--example", "-e", help="Use a bundled example instead of a file.", metavar="NAME"
+        ),
     ] = None,
     target_fos: Annotated[
         float | None,
-        typer.Option("--target-fos", "-t", min=0.0, help="Factor of safety to reach "
-                     "(default: stabilisation.target_fos of the file, else 1.3)."),
+        typer.Option(
+            "--target-fos",
+            "-t",
+            min=0.0,
+            help="Factor of safety to reach "
+            "(default: stabilisation.target_fos of the file, else 1.3).",
+        ),
     ] = None,
     out_dir: Annotated[
         Path | None,
-        typer.Option("--out", "-o", help="Write stabilisation.json, one table per CSV and a "
-                     "picture per trial into this folder.", metavar="DIR"),
+        typer.Option(
+            "--out",
+            "-o",
+            help="Write stabilisation.json, one table per CSV and a "
+            "picture per trial into this folder.",
+            metavar="DIR",
+        ),
     ] = None,
     overwrite: Annotated[
         bool, typer.Option("--overwrite", help="Replace result files that exist already.")
@@ -43,8 +54,9 @@ def stabilise(
         bool, typer.Option("--json", help="Print one JSON object to stdout (for scripts).")
     ] = False,
     quiet: Annotated[bool, typer.Option("--quiet", "-q", help="No notes on stderr.")] = False,
-    debug: Annotated[bool, typer.Option("--debug", help="Show the full traceback of errors.")
-                     ] = False,
+    debug: Annotated[
+        bool, typer.Option("--debug", help="Show the full traceback of errors.")
+    ] = False,
 ) -> None:
     """Stabilise a slope: remove unstable blocks until the target factor of safety is
     reached, and compare with a berm and a support force; analyse excavation stages.
@@ -62,10 +74,17 @@ def stabilise(
         path, m, cfg = _load(model, example)
         if target_fos is not None and not target_fos > 0:
             raise InputError("--target-fos", f"{target_fos}", "give a value > 0")
-        if out_dir is not None and out_dir.exists() and not overwrite \
-                and (out_dir / "stabilisation.json").exists():
-            raise InputError(str(out_dir / "stabilisation.json"), "already exists",
-                             "use --overwrite to replace it")
+        if (
+            out_dir is not None
+            and out_dir.exists()
+            and not overwrite
+            and (out_dir / "stabilisation.json").exists()
+        ):
+            raise InputError(
+                str(out_dir / "stabilisation.json"),
+                "already exists",
+                "use --overwrite to replace it",
+            )
         result = study(m, cfg, target_fos=target_fos, support=not no_support)
         doc = {**_header(path, m, cfg), "command": "stabilise", **summary(result)}
         if out_dir is not None:
@@ -116,8 +135,9 @@ def write(folder: Path, result, doc: dict[str, Any]) -> list[Path]:
             w = csv.DictWriter(fh, fieldnames=list(rows[0]))
             w.writeheader()
             for r in rows:
-                w.writerow({k: (" ".join(map(str, v)) if isinstance(v, list) else v)
-                            for k, v in r.items()})
+                w.writerow(
+                    {k: (" ".join(map(str, v)) if isinstance(v, list) else v) for k, v in r.items()}
+                )
         files.append(path)
     files += save_pictures(result, folder)
     return files
@@ -133,45 +153,101 @@ def print_summary(doc: dict[str, Any]) -> None:
 
     from .cli import out
 
-    out.print(f"[bold]{escape(doc['model_name'])}[/bold]  ({escape(doc['model_file'])}): "
-              f"target factor of safety {doc['target_fos']:g}")
+    out.print(
+        f"[bold]{escape(doc['model_name'])}[/bold]  ({escape(doc['model_file'])}): "
+        f"target factor of safety {doc['target_fos']:g}"
+    )
     if doc.get("removal"):
-        table = Table("trial", "removed blocks", "area removed", "FS", "target", "",
-                      title="block removal", box=None, pad_edge=False)
+        table = Table(
+            "trial",
+            "removed blocks",
+            "area removed",
+            "FS",
+            "target",
+            "",
+            title="block removal",
+            box=None,
+            pad_edge=False,
+        )
         for r in doc["removal"]:
             ids = r["blocks_removed"]
             shown = ", ".join(map(str, ids[:12])) + (" ..." if len(ids) > 12 else "")
-            table.add_row(f"{r['trial']}: {escape(r['label'])}", f"{len(ids)}: {shown}"
-                          if ids else "0", _f(r["area_removed"]), escape(r["fos_text"]),
-                          "yes" if r["reaches_target"] else "no",
-                          "accepted" if r["accepted"] else "")
+            table.add_row(
+                f"{r['trial']}: {escape(r['label'])}",
+                f"{len(ids)}: {shown}" if ids else "0",
+                _f(r["area_removed"]),
+                escape(r["fos_text"]),
+                "yes" if r["reaches_target"] else "no",
+                "accepted" if r["accepted"] else "",
+            )
         out.print(table)
-    table = Table("measure", "area removed", "support force", "FS", "target", "note",
-                  title="measures side by side", box=None, pad_edge=False)
+    table = Table(
+        "measure",
+        "area removed",
+        "support force",
+        "FS",
+        "target",
+        "note",
+        title="measures side by side",
+        box=None,
+        pad_edge=False,
+    )
     for r in doc["measures"]:
-        table.add_row(escape(r["measure"]), _f(r["removed_area"]), _f(r["support_force"]),
-                      escape(r["fos_text"]), "yes" if r["reaches_target"] else "no",
-                      escape(r["note"][:90]))
+        table.add_row(
+            escape(r["measure"]),
+            _f(r["removed_area"]),
+            _f(r["support_force"]),
+            escape(r["fos_text"]),
+            "yes" if r["reaches_target"] else "no",
+            escape(r["note"][:90]),
+        )
     out.print(table)
     if doc.get("designs"):
-        table = Table("design", "area removed", "FS", "target", "further removal",
-                      "total area", title="designs of the file", box=None, pad_edge=False)
+        table = Table(
+            "design",
+            "area removed",
+            "FS",
+            "target",
+            "further removal",
+            "total area",
+            title="designs of the file",
+            box=None,
+            pad_edge=False,
+        )
         for r in doc["designs"]:
-            table.add_row(escape(r["design"]), _f(r["area_removed"]), escape(r["fos_text"]),
-                          "yes" if r["reaches_target"] else "no",
-                          str(len(r["further_blocks"])), _f(r["total_area_removed"]))
+            table.add_row(
+                escape(r["design"]),
+                _f(r["area_removed"]),
+                escape(r["fos_text"]),
+                "yes" if r["reaches_target"] else "no",
+                str(len(r["further_blocks"])),
+                _f(r["total_area_removed"]),
+            )
         out.print(table)
     if doc.get("stages"):
-        table = Table("stage", "name", "verdict", "area removed", "joints failed",
-                      title="excavation stages", box=None, pad_edge=False)
+        table = Table(
+            "stage",
+            "name",
+            "verdict",
+            "area removed",
+            "joints failed",
+            title="excavation stages",
+            box=None,
+            pad_edge=False,
+        )
         for r in doc["stages"]:
-            table.add_row(str(r["stage"]), escape(r["name"]),
-                          "stable" if r["stable"] else "UNSTABLE", _f(r["area_removed"]),
-                          str(r["new_failed_joints"]))
+            table.add_row(
+                str(r["stage"]),
+                escape(r["name"]),
+                "stable" if r["stable"] else "UNSTABLE",
+                _f(r["area_removed"]),
+                str(r["new_failed_joints"]),
+            )
         out.print(table)
         out.print(escape(doc["excavation_message"]))
-    verdict = "[bold green]REACHED[/bold green]" if doc["reached"] else \
-        "[bold red]NOT REACHED[/bold red]"
+    verdict = (
+        "[bold green]REACHED[/bold green]" if doc["reached"] else "[bold red]NOT REACHED[/bold red]"
+    )
     out.print(f"block removal: {verdict}: {escape(doc['message'])}")
     if doc["needs"]:
         out.print(f"needed instead: {escape(doc['needs'])}")

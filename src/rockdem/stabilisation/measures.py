@@ -202,34 +202,58 @@ def compare_measures(
         Run :func:`stabilise` for the removal row.
     """
     base = rate(model, width=width)
-    rows = [Measure("none", "slope as it is", 0.0, None, base, meets(base, target_fos),
-                    "", model)]
+    rows = [Measure("none", "slope as it is", 0.0, None, base, meets(base, target_fos), "", model)]
     if berm is not None:
         mb = _edit.cut_profile(model, berm)
         fb = rate(mb, width=width)
         _, area = _edit.removed_between(model, mb)
-        rows.append(Measure("berm", "berm (new profile)", area, None, fb,
-                            meets(fb, target_fos), "", mb))
+        rows.append(
+            Measure("berm", "berm (new profile)", area, None, fb, meets(fb, target_fos), "", mb)
+        )
     search = None
     if support:
-        search = support_force(model, target_fos, at=support_at, angle=support_angle,
-                               width=width)
+        search = support_force(model, target_fos, at=support_at, angle=support_angle, width=width)
         at = f"({search.at[0]:.2f}, {search.at[1]:.2f})"
         if search.force is None:
-            note = (f"at {at}, angle {search.angle:g}: not reached up to "
-                    f"{search.bracket[0]:.3g} (a single force cannot hold the mechanism)")
+            note = (
+                f"at {at}, angle {search.angle:g}: not reached up to "
+                f"{search.bracket[0]:.3g} (a single force cannot hold the mechanism)"
+            )
             rows.append(Measure("support", "support force", 0.0, None, None, False, note, None))
         else:
-            note = f"at {at}, angle {search.angle:g}; force bracket {search.bracket[0]:.3g}" \
-                   f"-{search.bracket[1]:.3g}"
-            rows.append(Measure("support", "support force", 0.0, search.force, search.fos,
-                                True, note, search.model))
+            note = (
+                f"at {at}, angle {search.angle:g}; force bracket {search.bracket[0]:.3g}"
+                f"-{search.bracket[1]:.3g}"
+            )
+            rows.append(
+                Measure(
+                    "support",
+                    "support force",
+                    0.0,
+                    search.force,
+                    search.fos,
+                    True,
+                    note,
+                    search.model,
+                )
+            )
     stab = None
     if removal:
-        stab = stabilise(model, target_fos, max_rounds=max_rounds, max_removal=max_removal,
-                         width=width)
+        stab = stabilise(
+            model, target_fos, max_rounds=max_rounds, max_removal=max_removal, width=width
+        )
         f = stab.final
         note = stab.message if stab.reached else f"{stab.message}; needs {stab.needs}"
-        rows.append(Measure("removal", f"block removal ({len(f.removed_blocks)} blocks)",
-                            f.removed_area, None, f.fos, stab.reached, note, f.model))
+        rows.append(
+            Measure(
+                "removal",
+                f"block removal ({len(f.removed_blocks)} blocks)",
+                f.removed_area,
+                None,
+                f.fos,
+                stab.reached,
+                note,
+                f.model,
+            )
+        )
     return MeasureComparison(target_fos, tuple(rows), stab, search)

@@ -63,28 +63,46 @@ class Study:
         out: dict[str, list[dict]] = {"measures": self.comparison.rows()}
         if self.removal is not None:
             out["removal"] = [
-                {"trial": t.number, "round": t.round, "label": t.label,
-                 "blocks_removed": list(t.removed_blocks), "n_removed": len(t.removed_blocks),
-                 "area_removed": t.removed_area, "factor_of_safety": t.factor,
-                 "fos_text": describe(t.fos), "mode": t.fos.mode,
-                 "reaches_target": meets(t.fos, self.target), "accepted": t.accepted,
-                 "mechanism": list(t.mechanism)}
+                {
+                    "trial": t.number,
+                    "round": t.round,
+                    "label": t.label,
+                    "blocks_removed": list(t.removed_blocks),
+                    "n_removed": len(t.removed_blocks),
+                    "area_removed": t.removed_area,
+                    "factor_of_safety": t.factor,
+                    "fos_text": describe(t.fos),
+                    "mode": t.fos.mode,
+                    "reaches_target": meets(t.fos, self.target),
+                    "accepted": t.accepted,
+                    "mechanism": list(t.mechanism),
+                }
                 for t in self.removal.trials
             ]
         out["designs"] = [
-            {"design": d.name, "blocks_removed": list(d.removed_blocks),
-             "area_removed": d.removed_area, "factor_of_safety": _factor(d.fos),
-             "fos_text": describe(d.fos), "reaches_target": d.reached,
-             "further_blocks": list(d.then.removed_blocks) if d.then else [],
-             "total_area_removed": d.total_removed_area,
-             "further_reached": d.then.reached if d.then else None}
+            {
+                "design": d.name,
+                "blocks_removed": list(d.removed_blocks),
+                "area_removed": d.removed_area,
+                "factor_of_safety": _factor(d.fos),
+                "fos_text": describe(d.fos),
+                "reaches_target": d.reached,
+                "further_blocks": list(d.then.removed_blocks) if d.then else [],
+                "total_area_removed": d.total_removed_area,
+                "further_reached": d.then.reached if d.then else None,
+            }
             for d in self.designs
         ]
         if self.excavation is not None:
             out["stages"] = [
-                {"stage": s.number, "name": s.name, "stable": s.stable,
-                 "area_removed": s.removed_area, "new_failed_joints": len(s.new_failures),
-                 "unstable_blocks": [int(i) for i in s.analysis.unstable_blocks]}
+                {
+                    "stage": s.number,
+                    "name": s.name,
+                    "stable": s.stable,
+                    "area_removed": s.removed_area,
+                    "new_failed_joints": len(s.new_failures),
+                    "unstable_blocks": [int(i) for i in s.analysis.unstable_blocks],
+                }
                 for s in self.excavation.stages
             ]
             out["stage_failures"] = self.excavation.failures_by_stage()
@@ -101,8 +119,15 @@ def _removal_kw(r) -> dict:
     return {"blocks": list(r.blocks), "regions": list(r.regions), "profile": r.profile}
 
 
-def study(model: Model, cfg, *, target_fos: float | None = None, support: bool = True,
-          stages: bool = True, width: float = 0.01) -> Study:
+def study(
+    model: Model,
+    cfg,
+    *,
+    target_fos: float | None = None,
+    support: bool = True,
+    stages: bool = True,
+    width: float = 0.01,
+) -> Study:
     """Run the stabilisation study a model file describes.
 
     Parameters
@@ -119,12 +144,15 @@ def study(model: Model, cfg, *, target_fos: float | None = None, support: bool =
     target = float(target_fos if target_fos is not None else spec.target_fos)
     sup = spec.support
     comparison = compare_measures(
-        model, target,
+        model,
+        target,
         berm=[tuple(p) for p in spec.berm] if spec.berm else None,
         support=support,
         support_at=tuple(sup.at) if sup is not None and sup.at is not None else None,
         support_angle=sup.angle if sup is not None else 195.0,
-        max_removal=spec.max_removal, max_rounds=spec.max_rounds, width=width,
+        max_removal=spec.max_removal,
+        max_rounds=spec.max_rounds,
+        width=width,
     )
     designs = []
     for t in spec.trials:
@@ -133,13 +161,20 @@ def study(model: Model, cfg, *, target_fos: float | None = None, support: bool =
         f = rate(m, width=width)
         then = None
         if t.stabilise and not meets(f, target):
-            then = stabilise(m, target, max_rounds=spec.max_rounds, max_removal=1.0,
-                             smallest_set=spec.smallest_set, width=width)
+            then = stabilise(
+                m,
+                target,
+                max_rounds=spec.max_rounds,
+                max_removal=1.0,
+                smallest_set=spec.smallest_set,
+                width=width,
+            )
         designs.append(DesignTrial(t.name, m, ids, area, f, meets(f, target), then))
     excavation = None
     if stages and spec.stages:
         excavation = excavate_in_stages(
-            model, [Stage(s.name, **_removal_kw(s.remove)) for s in spec.stages])
+            model, [Stage(s.name, **_removal_kw(s.remove)) for s in spec.stages]
+        )
     return Study(target, comparison, tuple(designs), excavation)
 
 
@@ -173,10 +208,14 @@ def save_pictures(result: Study | Stabilisation, folder, *, dpi: int = 110) -> l
 
         for s in result.excavation.stages:
             fig, ax = plt.subplots(figsize=(8, 5))
-            plot_failure(s.analysis, ax=ax, title=f"stage {s.number}: {s.name} "
-                         f"({'stable' if s.stable else 'unstable'} at "
-                         f"F = {format_factor(s.analysis.strength_factor)}, "
-                         f"{len(s.new_failures)} joints failed in this stage)")
+            plot_failure(
+                s.analysis,
+                ax=ax,
+                title=f"stage {s.number}: {s.name} "
+                f"({'stable' if s.stable else 'unstable'} at "
+                f"F = {format_factor(s.analysis.strength_factor)}, "
+                f"{len(s.new_failures)} joints failed in this stage)",
+            )
             fig.tight_layout()
             path = folder / f"stage-{s.number:02d}.png"
             fig.savefig(path, dpi=dpi)
@@ -197,18 +236,29 @@ def trial_picture(trial, original: Model, target: float, *, ax=None, title: str 
     else:
         shown = trial.fos.failed_analysis or trial.fos.stable_analysis
     if title is None:
-        title = (f"trial {trial.number}: {trial.label}\n{len(trial.removed_blocks)} blocks "
-                 f"removed (area {trial.removed_area:.2f}), FS {describe(trial.fos)}, "
-                 f"target {target:g}; state shown at F = {format_factor(shown.strength_factor)}")
+        title = (
+            f"trial {trial.number}: {trial.label}\n{len(trial.removed_blocks)} blocks "
+            f"removed (area {trial.removed_area:.2f}), FS {describe(trial.fos)}, "
+            f"target {target:g}; state shown at F = {format_factor(shown.strength_factor)}"
+        )
     ax = plot_failure(shown, ax=ax, title=title)
     b = original.blocks
-    removed = [v for v, i in zip(b.polygons(), b.ids, strict=True) if int(i) in
-               set(trial.removed_blocks)]
+    removed = [
+        v for v, i in zip(b.polygons(), b.ids, strict=True) if int(i) in set(trial.removed_blocks)
+    ]
     if removed:
         import numpy as np
 
         verts = [np.asarray(p.exterior.coords) for p in removed]
-        ax.add_collection(PolyCollection(verts, facecolors="none", edgecolors="0.4",
-                                         linestyles="--", linewidths=0.8, gid="removed"))
+        ax.add_collection(
+            PolyCollection(
+                verts,
+                facecolors="none",
+                edgecolors="0.4",
+                linestyles="--",
+                linewidths=0.8,
+                gid="removed",
+            )
+        )
         ax.autoscale_view()
     return ax

@@ -141,9 +141,11 @@ class Stabilisation:
     def __repr__(self) -> str:
         f = self.final
         word = "reached" if self.reached else "NOT reached"
-        return (f"<Stabilisation: target {self.target:g}, {word}"
-                f", {len(f.removed_blocks)} blocks removed (area {f.removed_area:.3g}), "
-                f"FS {describe(f.fos)}>")
+        return (
+            f"<Stabilisation: target {self.target:g}, {word}"
+            f", {len(f.removed_blocks)} blocks removed (area {f.removed_area:.3g}), "
+            f"FS {describe(f.fos)}>"
+        )
 
 
 def stabilise(
@@ -210,43 +212,66 @@ def stabilise(
             # no factor brackets it: remove what moves under the loads as they are
             mech = tuple(int(i) for i in analyse(current.model).unstable_blocks)
         if not mech:
-            return _done(target_fos, trials, False,
-                         "no moving blocks were found to remove",
-                         "another measure (support or a new profile)")
+            return _done(
+                target_fos,
+                trials,
+                False,
+                "no moving blocks were found to remove",
+                "another measure (support or a new profile)",
+            )
         try:
             cand = _edit.remove_ids(current.model, mech)
         except InputError as exc:
-            return _done(target_fos, trials, False,
-                         f"the mechanism blocks cannot be removed alone ({exc.problem})",
-                         "remove a region instead (a new profile)")
+            return _done(
+                target_fos,
+                trials,
+                False,
+                f"the mechanism blocks cannot be removed alone ({exc.problem})",
+                "remove a region instead (a new profile)",
+            )
         share = 1.0 - _edit.free_area(cand) / area0
         if share > max_removal:
             return _done(target_fos, trials, False, *_too_much(current, mech, share, max_removal))
         fos = rate(cand, width=width)
-        chosen = add(rnd, f"round {rnd}: remove the {len(mech)} mechanism blocks", cand, fos,
-                     False)
+        chosen = add(rnd, f"round {rnd}: remove the {len(mech)} mechanism blocks", cand, fos, False)
         if meets(fos, target_fos) and smallest_set and len(mech) > 1:
             chosen = _smaller(current, mech, chosen, target_fos, width, rnd, add)
         current = _accept(trials, chosen)
     final = [t for t in trials if t.accepted][-1]
     if meets(final.fos, target_fos):
         n = len(final.removed_blocks)
-        return _done(target_fos, trials, True,
-                     f"target {target_fos:g} reached by removing {n} blocks "
-                     f"(area {final.removed_area:.3g}, "
-                     f"{100 * final.removed_area / area0:.0f}% of the rock): "
-                     f"factor of safety {describe(final.fos)}")
-    return _done(target_fos, trials, False,
-                 f"target {target_fos:g} not reached after {max_rounds} removal rounds "
-                 f"(factor of safety {describe(final.fos)})",
-                 "support forces or a flatter profile (berm)")
+        return _done(
+            target_fos,
+            trials,
+            True,
+            f"target {target_fos:g} reached by removing {n} blocks "
+            f"(area {final.removed_area:.3g}, "
+            f"{100 * final.removed_area / area0:.0f}% of the rock): "
+            f"factor of safety {describe(final.fos)}",
+        )
+    return _done(
+        target_fos,
+        trials,
+        False,
+        f"target {target_fos:g} not reached after {max_rounds} removal rounds "
+        f"(factor of safety {describe(final.fos)})",
+        "support forces or a flatter profile (berm)",
+    )
 
 
 def _accept(trials: list[RemovalTrial], chosen: RemovalTrial) -> RemovalTrial:
     """Mark ``chosen`` as the design the next round starts from."""
     k = trials.index(chosen)
-    accepted = RemovalTrial(chosen.number, chosen.round, chosen.label, chosen.removed_blocks,
-                            chosen.removed_area, chosen.fos, chosen.model, True)
+    accepted = RemovalTrial(
+        chosen.number,
+        chosen.round,
+        chosen.label,
+        chosen.removed_blocks,
+        chosen.removed_area,
+        chosen.fos,
+        chosen.model,
+        True,
+    )
     trials[k] = accepted
     return accepted
 
@@ -264,8 +289,13 @@ def _smaller(current, mech, full, target, width, rnd, add) -> RemovalTrial:
         except InputError:
             lo = mid
             continue
-        t = add(rnd, f"round {rnd}: remove the top {mid} of the {len(order)} mechanism blocks",
-                m, rate(m, width=width), False)
+        t = add(
+            rnd,
+            f"round {rnd}: remove the top {mid} of the {len(order)} mechanism blocks",
+            m,
+            rate(m, width=width),
+            False,
+        )
         if meets(t.fos, target):
             hi, best = mid, t
         else:
