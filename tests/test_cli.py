@@ -116,15 +116,17 @@ def test_run_writes_result_files(box, tmp_path):
     assert sorted(p.name for p in out.iterdir()) == sorted(RESULT_FILES)
     blocks = _read_csv(out / "blocks.csv")
     assert [b["id"] for b in blocks] == ["0", "1", "2"]
-    assert float(blocks[1]["weight"]) == pytest.approx(50)
+    # the headings carry the units of the file's `units: kN, m, kPa`
+    assert float(blocks[1]["weight [kN]"]) == pytest.approx(50)
     faces = _read_csv(out / "interfaces.csv")
     assert len(faces) == 2
-    for key in ("block_a", "block_b", "kind", "length", "normal_force", "shear_force",
-                "normal_stress", "shear_stress", "state", "local_fos", "first_failure"):
+    for key in ("block_a", "block_b", "kind", "length [m]", "normal_force [kN]",
+                "shear_force [kN]", "normal_stress [kPa]", "shear_stress [kPa]", "state",
+                "local_fos", "first_failure"):
         assert key in faces[0]
     base = next(f for f in faces if {f["block_a"], f["block_b"]} == {"0", "1"})
-    assert float(base["normal_force"]) == pytest.approx(100, rel=1e-6)  # both blocks on it
-    assert float(base["normal_stress"]) == pytest.approx(50, rel=1e-6)
+    assert float(base["normal_force [kN]"]) == pytest.approx(100, rel=1e-6)  # both blocks on it
+    assert float(base["normal_stress [kPa]"]) == pytest.approx(50, rel=1e-6)
     assert base["state"] == "elastic" and base["first_failure"] == "-1"
     springs = _read_csv(out / "springs.csv")
     assert len(springs) == 2 * 3
@@ -134,7 +136,8 @@ def test_run_writes_result_files(box, tmp_path):
     assert doc["model"]["analysis"]["load_steps"] == 5  # the echo has the defaults
     assert doc["stable"] is True
     assert len(doc["interfaces"]) == 2 and len(doc["springs"]) == 6
-    assert doc["interfaces"][0].keys() == faces[0].keys()
+    # result.json keeps the bare names (their units under column_units)
+    assert list(doc["interfaces"][0]) == [k.split(" [")[0] for k in faces[0]]
     assert not [p for p in tmp_path.iterdir() if p.name.startswith(".")]  # no temp dirs left
 
 

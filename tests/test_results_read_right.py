@@ -193,9 +193,7 @@ def test_joints_failed_in_tension_and_closed_again_are_history_not_open(bedded):
     coll = {c.get_gid(): c for c in ax.collections}
     sp_now = a.springs.current
     assert len(coll["interfaces-open"].get_segments()) == int((sp_now == 3).sum())
-    assert len(coll["interfaces-closed-failed-earlier"].get_segments()) == int(
-        (sp_now == 1).sum()
-    )
+    assert len(coll["interfaces-closed-failed-earlier"].get_segments()) == int((sp_now == 1).sum())
     labels = [t.get_text() for t in ax.get_legend().get_texts()]
     assert any(t.startswith("failed earlier, now closed (") for t in labels)
     assert ax.get_legend().get_title().get_text().startswith("joints now")
@@ -459,3 +457,182 @@ def test_cli_json_csv_and_report_carry_modes_and_boundary_warnings(tmp_path):
     text = report.read_text(encoding="utf-8")
     assert 'class="warning"' in text and "reaches the fixed back boundary at x = -8" in text
     assert "Failure modes: 1 slides" in text
+
+
+# ------------------------------------------------------------------ stabilise
+LONG_NOTE = (
+    "at (-2.38, 4.12), angle 195: not reached up to 250 t (a single force cannot hold "
+    "the mechanism); toppling columns need support that ties them back to stable rock"
+)
+
+
+def _stabilise_doc():
+    return {
+        "model_name": "slope",
+        "model_file": "slope.yaml",
+        "target_fos": 1.3,
+        "reached": True,
+        "message": "target 1.3 reached by removing 2 blocks",
+        "needs": "",
+        "removal": [
+            {
+                "trial": 0,
+                "label": "slope as it is",
+                "blocks_removed": [],
+                "area_removed": 0.0,
+                "fos_text": "0.904",
+                "reaches_target": False,
+                "accepted": True,
+            },
+            {
+                "trial": 1,
+                "label": "round 1: remove the 2 mechanism blocks",
+                "blocks_removed": [3, 4],
+                "area_removed": 2.5,
+                "fos_text": "> 17.1",
+                "reaches_target": True,
+                "accepted": False,
+            },
+        ],
+        "measures": [
+            {
+                "measure": "support force",
+                "removed_area": 0.0,
+                "support_force": 12.5,
+                "fos_text": "1.301",
+                "reaches_target": True,
+                "note": LONG_NOTE,
+            }
+        ],
+        "designs": [],
+    }
+
+
+@pytest.mark.parametrize("width", [60, 80, 200])
+def test_stabilise_tables_wrap_notes_at_words_head_every_column_and_explain_more_than(
+    monkeypatch, width
+):
+    import io
+
+    from rich.console import Console
+
+    import rockdem.cli
+    from rockdem.cli_stabilise import print_summary
+    from rockdem.units import parse_units
+
+    buf = io.StringIO()
+    monkeypatch.setattr(
+        rockdem.cli, "out", Console(file=buf, width=width, highlight=False, soft_wrap=True)
+    )
+    print_summary(_stabilise_doc(), parse_units("kN, m, kPa"))
+    text = buf.getvalue()
+    words = set(text.split())
+    assert set(LONG_NOTE.split()) <= words  # no word of the note cut or dropped
+    assert "at least" in text and "> X" in text  # what "> 17.1" means
+    if width == 200:
+        lines = text.splitlines()
+        head = next(ln for ln in lines if ln.startswith("trial"))
+        assert head.split() == [
+            "trial",
+            "removed",
+            "blocks",
+            "area",
+            "removed",
+            "(m^2)",
+            "FS",
+            "target",
+            "design",
+        ]
+        assert "support force (kN)" in text and "area removed (m^2)" in text
+        assert "tried" in text and "accepted" in text
+
+
+def test_stabilise_study_reports_progress_and_the_command_shows_it(monkeypatch):
+    from typer.testing import CliRunner
+
+    import rockdem.stabilisation
+    from rockdem.cli import app
+    from rockdem.stabilisation import study
+
+    m = example("wedge-verification")
+    cfg = load_model(example_path("wedge-verification"))[1]
+    notes = []
+    study(m, cfg, target_fos=1.0, support=False, stages=False, progress=notes.append)
+    assert notes[0] == "the slope as it is"
+    assert any("strength trial F = " in n for n in notes)
+    assert any(n.startswith("block removal") for n in notes)
+    # the command hands the study a progress hook
+    seen = {}
+
+    def spy(*args, **kwargs):
+        seen.update(kwargs)
+        return study(*args, **kwargs)
+
+    monkeypatch.setattr(rockdem.stabilisation, "study", spy)
+    r = CliRunner().invoke(
+        app, ["stabilise", "--example", "wedge-verification", "--no-support", "-t", "1.0"]
+    )
+    assert r.exit_code == 0, r.output
+    assert callable(seen["progress"])
+    assert "area removed (m^2)" in r.stdout.replace("\n", " ") or "(m^2)" in r.stdout
+
+
+# ---------------------------------------------------------------------- units
+@pytest.mark.parametrize(
+    ("note", "force", "length", "stress"),
+    [
+        ("kN, m, kPa (angles in degrees)", "kN", "m", "kPa"),
+        ("t, m, t/m^2 (angles in degrees)", "t", "m", "t/m^2"),
+        ("MN-m-MPa", "MN", "m", "MPa"),
+        ("t, m", "t", "m", "t/m^2"),
+        ("units in kN and m", "kN", "m", "kN/m^2"),
+        ("", None, None, None),
+        ("consistent units", None, None, None),
+    ],
+)
+def test_units_are_read_from_the_models_note(note, force, length, stress):
+    from rockdem.units import parse_units
+
+    u = parse_units(note)
+    assert (u.force, u.length, u.stress) == (force, length, stress)
+    assert u.area == (f"{length}^2" if length else None)
+
+
+def test_result_csv_headings_carry_the_models_units(tmp_path):
+    import csv
+    import json
+
+    from typer.testing import CliRunner
+
+    from rockdem.cli import app
+
+    out = tmp_path / "r"
+    r = CliRunner().invoke(app, ["run", "--example", "wedge-verification", "--out", str(out)])
+    assert r.exit_code == 0, r.output
+    with (out / "blocks.csv").open() as fh:
+        head = next(csv.reader(fh))
+    assert {"area [m^2]", "weight [t]", "ux [m]", "rotation [rad]", "unit_weight [t/m^3]"} <= set(
+        head
+    )
+    with (out / "interfaces.csv").open() as fh:
+        head = next(csv.reader(fh))
+    assert {"normal_force [t]", "normal_stress [t/m^2]", "length [m]"} <= set(head)
+    with (out / "springs.csv").open() as fh:
+        head = next(csv.reader(fh))
+    assert {"sigma [t/m^2]", "tau [t/m^2]", "x [m]"} <= set(head)
+    doc = json.loads((out / "result.json").read_text())
+    assert doc["unit_system"]["force"] == "t" and doc["unit_system"]["area"] == "m^2"
+    assert doc["column_units"]["interfaces"]["normal_stress"] == "t/m^2"
+    assert "normal_stress" in doc["interfaces"][0]  # JSON keeps the bare names
+
+
+def test_result_csv_headings_stay_bare_without_a_unit_system(tmp_path):
+    import csv
+
+    from rockdem.output import analysis_tables, write_results
+    from rockdem.units import parse_units
+
+    a = rd.analyse(plane_model(20, 35, 1.0, 1.0))
+    write_results(tmp_path / "r", analysis_tables(a), {}, units=parse_units("consistent"))
+    with (tmp_path / "r" / "blocks.csv").open() as fh:
+        assert "area" in next(csv.reader(fh))

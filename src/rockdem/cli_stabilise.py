@@ -5,6 +5,8 @@ Registered in :mod:`rockdem.cli` with ``app.command()(stabilise)``.
 
 from __future__ import annotations
 
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Annotated, Any
 
@@ -69,7 +71,9 @@ def stabilise(
 
     with _guard(debug):
         from .errors import InputError
+        from .output import units_summary
         from .stabilisation import study
+        from .units import parse_units
 
         path, m, cfg = _load(model, example)
         if target_fos is not None and not target_fos > 0:
@@ -85,10 +89,17 @@ def stabilise(
                 "already exists",
                 "use --overwrite to replace it",
             )
-        result = study(m, cfg, target_fos=target_fos, support=not no_support)
-        doc = {**_header(path, m, cfg), "command": "stabilise", **summary(result)}
+        units = parse_units(cfg.units)
+        with _progress_line(quiet or json_) as note:
+            result = study(m, cfg, target_fos=target_fos, support=not no_support, progress=note)
+        doc = {
+            **_header(path, m, cfg),
+            "unit_system": units_summary(units),
+            "command": "stabilise",
+            **summary(result),
+        }
         if out_dir is not None:
-            files = write(out_dir, result, doc)
+            files = write(out_dir, result, doc, units)
             if not (quiet or json_):
                 from .cli import err
 
@@ -98,7 +109,33 @@ def stabilise(
 
             _echo_json(doc)
             return
-        print_summary(doc)
+        print_summary(doc, units)
+
+
+@contextmanager
+def _progress_line(quiet: bool) -> Iterator[Callable[[str], None]]:
+    """A spinner on stderr with what the study is computing and the time so far
+    (nothing when quiet or when stderr is not a terminal); yields the note hook."""
+    from rich.markup import escape
+    from rich.progress import Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
+
+    from .cli import err
+
+    bar = Progress(
+        SpinnerColumn(),
+        TimeElapsedColumn(),
+        TextColumn("{task.description}"),
+        console=err,
+        transient=True,
+        disable=quiet or not err.is_terminal,
+    )
+    with bar:
+        task = bar.add_task("stabilisation study", total=None)
+
+        def note(text: str) -> None:
+            bar.update(task, description=escape(text))
+
+        yield note
 
 
 def summary(result) -> dict[str, Any]:
@@ -114,12 +151,13 @@ def summary(result) -> dict[str, Any]:
     }
 
 
-def write(folder: Path, result, doc: dict[str, Any]) -> list[Path]:
-    """stabilisation.json, one CSV per table and the pictures."""
+def write(folder: Path, result, doc: dict[str, Any], units=None) -> list[Path]:
+    """stabilisation.json, one CSV per table (headings with units when the model
+    names them) and the pictures."""
     import csv
     import json
 
-    from .output import jsonable
+    from .output import column_units, csv_header, jsonable
     from .stabilisation import save_pictures
 
     folder.mkdir(parents=True, exist_ok=True)
@@ -131,12 +169,14 @@ def write(folder: Path, result, doc: dict[str, Any]) -> list[Path]:
         if not rows:
             continue
         path = folder / f"{name}.csv"
+        columns = list(rows[0])
+        unit_map = column_units(columns, units)
         with path.open("w", newline="", encoding="utf-8") as fh:
-            w = csv.DictWriter(fh, fieldnames=list(rows[0]))
-            w.writeheader()
+            w = csv.writer(fh, lineterminator="\n")
+            w.writerow([csv_header(c, unit_map) for c in columns])
             for r in rows:
                 w.writerow(
-                    {k: (" ".join(map(str, v)) if isinstance(v, list) else v) for k, v in r.items()}
+                    [" ".join(map(str, v)) if isinstance(v, list) else v for v in r.values()]
                 )
         files.append(path)
     files += save_pictures(result, folder)
@@ -147,75 +187,90 @@ def _f(v) -> str:
     return "-" if v is None else f"{v:.3g}"
 
 
-def print_summary(doc: dict[str, Any]) -> None:
+#: the footnote of a factor of safety printed as "> X"
+MORE_THAN = (
+    "> X: no failure at any strength factor tried, up to X, the largest the search "
+    "tries: the factor of safety is at least X."
+)
+
+
+def print_summary(doc: dict[str, Any], units=None) -> None:
+    """The study as tables: every column headed, units on areas and forces, notes
+    wrapped at word boundaries (never cut)."""
     from rich.markup import escape
     from rich.table import Table
 
     from .cli import out
+    from .units import UNKNOWN
+
+    units = units or UNKNOWN
+    area = "area removed" + units.suffix("area")
+    force = "support force" + units.suffix("force")
+
+    def table(title: str, *columns: str) -> Table:
+        t = Table(title=title, box=None, pad_edge=False, title_justify="left")
+        for c in columns:
+            t.add_column(c, overflow="fold")
+        return t
+
+    # notes inline on a wide console; on a narrow one under the table, where they
+    # wrap between words at the full width (a narrow column would cut them)
+    inline = out.width >= 120
+    footnotes: list[str] = []
+
+    def note(text: str) -> str:
+        if inline or not text:
+            return escape(text)
+        footnotes.append(text)
+        return f"note {len(footnotes)}"
 
     out.print(
         f"[bold]{escape(doc['model_name'])}[/bold]  ({escape(doc['model_file'])}): "
         f"target factor of safety {doc['target_fos']:g}"
     )
+    texts: list[str] = []
     if doc.get("removal"):
-        table = Table(
-            "trial",
-            "removed blocks",
-            "area removed",
-            "FS",
-            "target",
-            "",
-            title="block removal",
-            box=None,
-            pad_edge=False,
-        )
+        t = table("block removal", "trial", "removed blocks", area, "FS", "target", "design")
         for r in doc["removal"]:
             ids = r["blocks_removed"]
             shown = ", ".join(map(str, ids[:12])) + (" ..." if len(ids) > 12 else "")
-            table.add_row(
+            texts.append(r["fos_text"])
+            t.add_row(
                 f"{r['trial']}: {escape(r['label'])}",
                 f"{len(ids)}: {shown}" if ids else "0",
                 _f(r["area_removed"]),
                 escape(r["fos_text"]),
                 "yes" if r["reaches_target"] else "no",
-                "accepted" if r["accepted"] else "",
+                "accepted" if r["accepted"] else "tried",
             )
-        out.print(table)
-    table = Table(
-        "measure",
-        "area removed",
-        "support force",
-        "FS",
-        "target",
-        "note",
-        title="measures side by side",
-        box=None,
-        pad_edge=False,
-    )
+        out.print(t)
+    t = table("measures side by side", "measure", area, force, "FS", "target", "note")
     for r in doc["measures"]:
-        table.add_row(
+        texts.append(r["fos_text"])
+        t.add_row(
             escape(r["measure"]),
             _f(r["removed_area"]),
             _f(r["support_force"]),
             escape(r["fos_text"]),
             "yes" if r["reaches_target"] else "no",
-            escape(r["note"][:90]),
+            note(r["note"]),
         )
-    out.print(table)
+    out.print(t)
+    for k, text in enumerate(footnotes, start=1):
+        out.print(f"note {k}: {escape(text)}", soft_wrap=False)
     if doc.get("designs"):
-        table = Table(
+        t = table(
+            "designs of the file",
             "design",
-            "area removed",
+            area,
             "FS",
             "target",
-            "further removal",
-            "total area",
-            title="designs of the file",
-            box=None,
-            pad_edge=False,
+            "further blocks removed",
+            "total " + area,
         )
         for r in doc["designs"]:
-            table.add_row(
+            texts.append(r["fos_text"])
+            t.add_row(
                 escape(r["design"]),
                 _f(r["area_removed"]),
                 escape(r["fos_text"]),
@@ -223,31 +278,24 @@ def print_summary(doc: dict[str, Any]) -> None:
                 str(len(r["further_blocks"])),
                 _f(r["total_area_removed"]),
             )
-        out.print(table)
+        out.print(t)
     if doc.get("stages"):
-        table = Table(
-            "stage",
-            "name",
-            "verdict",
-            "area removed",
-            "joints failed",
-            title="excavation stages",
-            box=None,
-            pad_edge=False,
-        )
+        t = table("excavation stages", "stage", "name", "verdict", area, "joints failed")
         for r in doc["stages"]:
-            table.add_row(
+            t.add_row(
                 str(r["stage"]),
                 escape(r["name"]),
                 "stable" if r["stable"] else "UNSTABLE",
                 _f(r["area_removed"]),
                 str(r["new_failed_joints"]),
             )
-        out.print(table)
+        out.print(t)
         out.print(escape(doc["excavation_message"]))
+    if any(x.startswith(">") for x in texts):
+        out.print(escape(MORE_THAN), soft_wrap=False)
     verdict = (
         "[bold green]REACHED[/bold green]" if doc["reached"] else "[bold red]NOT REACHED[/bold red]"
     )
-    out.print(f"block removal: {verdict}: {escape(doc['message'])}")
+    out.print(f"block removal: {verdict}: {escape(doc['message'])}", soft_wrap=False)
     if doc["needs"]:
-        out.print(f"needed instead: {escape(doc['needs'])}")
+        out.print(f"needed instead: {escape(doc['needs'])}", soft_wrap=False)

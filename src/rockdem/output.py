@@ -21,7 +21,14 @@ some time, ``tension`` = failed in tension at some time), and
 interface first failed, -1 if never; ``local_fos`` is the full shear strength
 over the shear stress (``inf`` where unstressed).  In ``springs.csv``,
 ``capacity`` is the full shear strength (F = 1) and ``strength_at_factor``
-the strength at the factor the stresses were found at.
+the strength at the factor the stresses were found at.  ``failure_mode`` (in
+``blocks.csv``) is the block's mode at the limit (:mod:`rockdem.modes`).
+
+When the model's ``units`` note names a system (:func:`rockdem.units.parse_units`:
+"kN, m, kPa", "t, m, t/m^2", ...) every CSV heading with a unit carries it in
+brackets, ``area [m^2]``, ``normal_force [kN]``, ``normal_stress [kPa]``,
+``ux [m]``, ``rotation [rad]``, and ``result.json`` maps the columns to their
+units under ``column_units`` (its tables keep the bare names).
 """
 
 from __future__ import annotations
@@ -50,10 +57,13 @@ __all__ = [
     "analysis_summary",
     "analysis_tables",
     "check_output_dir",
+    "column_units",
+    "csv_header",
     "fos_summary",
     "jsonable",
     "mechanism_summary",
     "state_counts",
+    "units_summary",
     "write_results",
 ]
 
@@ -328,12 +338,54 @@ def check_output_dir(folder: str | Path, *, overwrite: bool = False) -> Path:
     return folder
 
 
-def _write_csv(path: Path, rows: list[dict[str, Any]], columns: list[str]) -> None:
+#: The quantity of every column with a unit (rockdem.units.Units attribute names).
+COLUMN_QUANTITY = {
+    **dict.fromkeys("area area_removed removed_area total_area_removed free_area".split(), "area"),
+    **dict.fromkeys(
+        "weight normal_force shear_force support_force free_weight force".split(), "force"
+    ),
+    **dict.fromkeys(
+        "normal_stress shear_stress sigma tau capacity strength_at_factor".split(), "stress"
+    ),
+    **dict.fromkeys(
+        "centroid_x centroid_y start_x start_y end_x end_y x y length".split(), "length"
+    ),
+    **dict.fromkeys("ux uy".split(), "displacement"),
+    "unit_weight": "unit_weight",
+}
+
+
+def column_units(columns, units=None) -> dict[str, str]:
+    """The unit of each column that has one (``{"area": "m^2", ...}``); empty when
+    ``units`` (a :class:`~rockdem.units.Units`) names no system."""
+    if units is None or not units.known:
+        return {}
+    out = {c: units.unit(COLUMN_QUANTITY[c]) for c in columns if c in COLUMN_QUANTITY}
+    if "rotation" in columns:
+        out["rotation"] = "rad"
+    return out
+
+
+def units_summary(units) -> dict[str, str | None]:
+    """The unit of each quantity as plain data (all None when not known)."""
+    names = ("force", "length", "stress", "area", "displacement", "unit_weight")
+    return {q: (units.unit(q) if units is not None else None) for q in names}
+
+
+def csv_header(column: str, unit_map: dict[str, str]) -> str:
+    """A CSV heading: ``"normal_stress [kPa]"`` when the unit is known, else the name."""
+    unit = unit_map.get(column)
+    return f"{column} [{unit}]" if unit else column
+
+
+def _write_csv(path: Path, rows: list[dict[str, Any]], columns: list[str], units=None) -> None:
+    unit_map = column_units(columns, units)
+    header = [csv_header(c, unit_map) for c in columns]
     with path.open("w", newline="", encoding="utf-8") as fh:
-        writer = csv.DictWriter(fh, fieldnames=columns, lineterminator="\n")
-        writer.writeheader()
+        writer = csv.writer(fh, lineterminator="\n")
+        writer.writerow(header)
         for row in rows:
-            writer.writerow({k: _csv_value(v) for k, v in row.items()})
+            writer.writerow([_csv_value(row[c]) for c in columns])
 
 
 def _csv_value(v: Any) -> Any:
@@ -367,6 +419,7 @@ def write_results(
     document: dict[str, Any],
     *,
     overwrite: bool = False,
+    units=None,
 ) -> list[Path]:
     """Write the result files into ``folder``, all or nothing.
 
@@ -381,6 +434,10 @@ def write_results(
         summary); the tables are added under their names.
     overwrite : bool
         Replace result files already in ``folder``.
+    units : Units, optional
+        The model's units (:func:`rockdem.units.parse_units`): CSV headings
+        carry them (``"normal_stress [kPa]"``) and ``result.json`` gets a
+        ``column_units`` map; without a known system the headings are bare.
 
     Returns
     -------
@@ -396,8 +453,13 @@ def write_results(
     os.chmod(tmp, 0o777 & ~umask)  # mkdtemp makes it private; the results are not
     try:
         for name in ("blocks", "interfaces", "springs"):
-            _write_csv(tmp / f"{name}.csv", tables[name], _COLUMNS[name])
+            _write_csv(tmp / f"{name}.csv", tables[name], _COLUMNS[name], units)
         doc = dict(document)
+        if units is not None and units.known:
+            doc["column_units"] = {
+                name: column_units(_COLUMNS[name], units)
+                for name in ("blocks", "interfaces", "springs")
+            }
         doc.update(tables)
         with (tmp / "result.json").open("w", encoding="utf-8") as fh:
             json.dump(jsonable(doc), fh, indent=1, allow_nan=False)

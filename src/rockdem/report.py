@@ -26,6 +26,7 @@ from .analysis import analyse, factor_of_safety
 from .model import Model
 from .modes import boundary_warnings, failure_modes
 from .results import Analysis, FactorOfSafety, format_factor
+from .units import UNKNOWN, Units, parse_units
 
 _CSS = """
 body{font-family:system-ui,-apple-system,"Segoe UI",Roboto,Helvetica,Arial,sans-serif;
@@ -115,7 +116,7 @@ def _state_counts(a: Analysis) -> str:
 _NOW = ("closed", "closed", "sliding", "open")
 
 
-def _failed_table(a: Analysis, stress_unit: str, limit: int) -> str:
+def _failed_table(a: Analysis, stress_unit: str, limit: int, u: Units = UNKNOWN) -> str:
     """Every interface that has failed at some time (the history), with its state now."""
     ir = a.interfaces
     faces = a.system.interfaces
@@ -149,7 +150,7 @@ def _failed_table(a: Analysis, stress_unit: str, limit: int) -> str:
         "interface",
         "blocks",
         "from - to",
-        "length",
+        "length" + u.suffix("length"),
         "failed %",
         f"σ mean ({stress_unit})",
         f"τ mean ({stress_unit})",
@@ -166,7 +167,7 @@ def _failed_table(a: Analysis, stress_unit: str, limit: int) -> str:
     )
 
 
-def _unstable_table(a: Analysis, limit: int) -> str:
+def _unstable_table(a: Analysis, limit: int, u: Units = UNKNOWN) -> str:
     """The moving blocks with their failure mode (rockdem.modes) and mechanism motion."""
     blocks = a.system.blocks
     idx = np.flatnonzero(a.unstable)
@@ -195,8 +196,8 @@ def _unstable_table(a: Analysis, limit: int) -> str:
         "block",
         "failure mode",
         "pivot",
-        "area",
-        "weight",
+        "area" + u.suffix("area"),
+        "weight" + u.suffix("force"),
         "centroid",
         "mech. ux",
         "mech. uy",
@@ -229,7 +230,10 @@ def _inputs(model: Model, system, units: str | None) -> str:
         ["blocks", f"{blocks.n_blocks} ({n_free} free, {blocks.n_blocks - n_free} fixed)"],
         ["interfaces", str(system.interfaces.n_interfaces)],
         ["spring points", str(system.springs.n_springs)],
-        ["weight of free blocks", _num(blocks.weight[~blocks.fixed].sum(), ".5g")],
+        [
+            "weight of free blocks" + parse_units(units).suffix("force"),
+            _num(blocks.weight[~blocks.fixed].sum(), ".5g"),
+        ],
     ]
     s = model.settings
     summary += [
@@ -444,6 +448,7 @@ def write_report(
         raise ValueError("image_format must be 'png' or 'svg'")
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
+    u = parse_units(units)
     a = analysis if analysis is not None else analyse(model)
     if fos is None and compute_fos:
         fos = factor_of_safety(a.system, **(fos_options or {}))
@@ -581,18 +586,18 @@ def write_report(
         '<h2 id="tables">Failed joints and unstable blocks</h2>',
         f"<h3>Joints at {F1}: state now and failure history</h3>",
         f'<p class="states">{_esc(_state_counts(a))}.</p>',
-        _failed_table(a, stress_unit, max_rows),
+        _failed_table(a, stress_unit, max_rows, u),
         f"<h3>Unstable blocks at {F1}</h3>",
-        _unstable_table(a, max_rows),
+        _unstable_table(a, max_rows, u),
     ]
     if failed is not None and failed is not a and not _same_state(a, failed):
         sections += [
             f"<h3>Joints at F = {format_factor(failed.strength_factor)} (failure): state now "
             "and failure history</h3>",
             f'<p class="states">{_esc(_state_counts(failed))}.</p>',
-            _failed_table(failed, stress_unit, max_rows),
+            _failed_table(failed, stress_unit, max_rows, u),
             f"<h3>Unstable blocks at F = {format_factor(failed.strength_factor)} (failure)</h3>",
-            _unstable_table(failed, max_rows),
+            _unstable_table(failed, max_rows, u),
         ]
     sections += [
         '<h2 id="pictures">Pictures</h2>',

@@ -9,6 +9,7 @@ from typing import Any
 from rich.markup import escape
 from rich.table import Table
 
+from ..units import parse_units
 from .common import (
     DebugOpt,
     ExampleOpt,
@@ -58,10 +59,11 @@ def run(
             task = bar.add_task("load steps", total=m.settings.load_steps)
             result = analyse(m, progress=_step_hook(bar, task))
         summary = analysis_summary(result)
-        doc = {**_header(path, m, cfg), "command": "run", **summary}
+        units = parse_units(cfg.units)
+        doc = {**_header(path, m, cfg), **_units(units), "command": "run", **summary}
         if out_dir is not None:
             echo = {"model": cfg.model_dump(mode="json")}
-            _write(out_dir, result, {**doc, **echo}, overwrite, quiet or json_)
+            _write(out_dir, result, {**doc, **echo}, overwrite, quiet or json_, units=units)
         if json_:
             _echo_json(doc)
             return
@@ -69,14 +71,27 @@ def run(
 
 
 def _write(
-    folder: Path, analysis, document: dict[str, Any], overwrite: bool, quiet: bool, modes=None
+    folder: Path,
+    analysis,
+    document: dict[str, Any],
+    overwrite: bool,
+    quiet: bool,
+    modes=None,
+    units=None,
 ):
     from ..output import analysis_tables, write_results
 
     tables = analysis_tables(analysis, modes)
-    files = write_results(folder, tables, document, overwrite=overwrite)
+    files = write_results(folder, tables, document, overwrite=overwrite, units=units)
     if not quiet:
         err.print(f"results written to {escape(str(folder))}/ ({', '.join(f.name for f in files)})")
+
+
+def _units(units) -> dict[str, Any]:
+    """``unit_system``: the unit of each quantity read from the ``units`` note."""
+    from ..output import units_summary
+
+    return {"unit_system": units_summary(units)}
 
 
 _PROOF = {
@@ -208,7 +223,8 @@ def fos(
         with _progress(quiet, "strength reduction") as bar:
             task = bar.add_task("strength reduction trials", total=None)
             result = factor_of_safety(m, **_fos_options(cfg), progress=_trial_hook(bar, task))
-        doc = {**_header(path, m, cfg), "command": "fos", **fos_summary(result)}
+        units = parse_units(cfg.units)
+        doc = {**_header(path, m, cfg), **_units(units), "command": "fos", **fos_summary(result)}
         if out_dir is not None:
             state = result.stable_analysis or result.failed_analysis
             from ..modes import failure_modes
@@ -217,7 +233,7 @@ def fos(
             extra = {"analysis": analysis_summary(state), "model": cfg.model_dump(mode="json")}
             # the tables describe the last equilibrium; failure_mode is the limit's
             modes = failure_modes(result.failed_analysis) if result.failed_analysis else None
-            _write(out_dir, state, {**doc, **extra}, overwrite, quiet or json_, modes)
+            _write(out_dir, state, {**doc, **extra}, overwrite, quiet or json_, modes, units)
         if json_:
             _echo_json(doc)
             return

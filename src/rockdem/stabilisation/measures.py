@@ -16,7 +16,8 @@ import numpy as np
 from ..errors import InputError
 from ..model import Model, PointLoad
 from ..results import FactorOfSafety
-from . import _edit
+from ..units import Units
+from . import _edit, _progress
 from .removal import Stabilisation, describe, mechanism_ids, meets, rate, stabilise, stable_at
 
 __all__ = ["Measure", "MeasureComparison", "SupportSearch", "compare_measures", "support_force"]
@@ -109,6 +110,7 @@ def support_force(
         nonlocal count
         count += 1
         m = with_support(model, at, angle, force) if force > 0 else model
+        _progress.note(f"staged analysis {count} with a force of {force:.4g}")
         return stable_at(m, target_fos)
 
     if enough(0.0):
@@ -188,6 +190,7 @@ def compare_measures(
     max_removal: float = 0.3,
     max_rounds: int = 6,
     width: float = 0.01,
+    units: Units | None = None,
 ) -> MeasureComparison:
     """The slope as it is, a berm, a support force and block removal, side by side.
 
@@ -200,30 +203,38 @@ def compare_measures(
         :func:`support_force`); ``support=False`` skips it.
     removal : bool
         Run :func:`stabilise` for the removal row.
+    units : Units, optional
+        The model's units (:func:`rockdem.units.parse_units`), named in the notes.
     """
-    base = rate(model, width=width)
+    force_unit = f" {units.force}" if units is not None and units.known else ""
+    with _progress.stage("the slope as it is"):
+        base = rate(model, width=width)
     rows = [Measure("none", "slope as it is", 0.0, None, base, meets(base, target_fos), "", model)]
     if berm is not None:
         mb = _edit.cut_profile(model, berm)
-        fb = rate(mb, width=width)
+        with _progress.stage("berm"):
+            fb = rate(mb, width=width)
         _, area = _edit.removed_between(model, mb)
         rows.append(
             Measure("berm", "berm (new profile)", area, None, fb, meets(fb, target_fos), "", mb)
         )
     search = None
     if support:
-        search = support_force(model, target_fos, at=support_at, angle=support_angle, width=width)
+        with _progress.stage("support force"):
+            search = support_force(
+                model, target_fos, at=support_at, angle=support_angle, width=width
+            )
         at = f"({search.at[0]:.2f}, {search.at[1]:.2f})"
         if search.force is None:
             note = (
                 f"at {at}, angle {search.angle:g}: not reached up to "
-                f"{search.bracket[0]:.3g} (a single force cannot hold the mechanism)"
+                f"{search.bracket[0]:.3g}{force_unit} (a single force cannot hold the mechanism)"
             )
             rows.append(Measure("support", "support force", 0.0, None, None, False, note, None))
         else:
             note = (
                 f"at {at}, angle {search.angle:g}; force bracket {search.bracket[0]:.3g}"
-                f"-{search.bracket[1]:.3g}"
+                f"-{search.bracket[1]:.3g}{force_unit}"
             )
             rows.append(
                 Measure(
@@ -239,9 +250,15 @@ def compare_measures(
             )
     stab = None
     if removal:
-        stab = stabilise(
-            model, target_fos, max_rounds=max_rounds, max_removal=max_removal, width=width
-        )
+        with _progress.stage("block removal"):
+            stab = stabilise(
+                model,
+                target_fos,
+                max_rounds=max_rounds,
+                max_removal=max_removal,
+                width=width,
+                units=units,
+            )
         f = stab.final
         note = stab.message if stab.reached else f"{stab.message}; needs {stab.needs}"
         rows.append(

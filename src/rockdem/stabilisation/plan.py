@@ -7,12 +7,14 @@ draws one picture per trial.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
 from ..model import Model
 from ..results import FactorOfSafety, format_factor
-from . import _edit
+from ..units import parse_units
+from . import _edit, _progress
 from .measures import MeasureComparison, compare_measures
 from .removal import Stabilisation, describe, meets, rate, stabilise
 from .stages import Excavation, Stage, excavate_in_stages
@@ -127,6 +129,7 @@ def study(
     support: bool = True,
     stages: bool = True,
     width: float = 0.01,
+    progress: Callable[[str], None] | None = None,
 ) -> Study:
     """Run the stabilisation study a model file describes.
 
@@ -139,8 +142,17 @@ def study(
         Overrides ``stabilisation.target_fos``.
     support, stages : bool
         Include the support-force search and the excavation stages.
+    progress : callable, optional
+        Called with a one-line note (``"support force: staged analysis 3 with
+        a force of 12.5"``) at every search and analysis of the study.
     """
+    with _progress.reporting(progress):
+        return _study(model, cfg, target_fos, support, stages, width)
+
+
+def _study(model, cfg, target_fos, support, stages, width) -> Study:
     spec = cfg.stabilisation
+    units = parse_units(getattr(cfg, "units", ""))
     target = float(target_fos if target_fos is not None else spec.target_fos)
     sup = spec.support
     comparison = compare_measures(
@@ -153,28 +165,33 @@ def study(
         max_removal=spec.max_removal,
         max_rounds=spec.max_rounds,
         width=width,
+        units=units,
     )
     designs = []
     for t in spec.trials:
         m = _edit.apply_removal(model, **_removal_kw(t.remove))
         ids, area = _edit.removed_between(model, m)
-        f = rate(m, width=width)
+        with _progress.stage(f"design {t.name}"):
+            f = rate(m, width=width)
         then = None
         if t.stabilise and not meets(f, target):
-            then = stabilise(
-                m,
-                target,
-                max_rounds=spec.max_rounds,
-                max_removal=1.0,
-                smallest_set=spec.smallest_set,
-                width=width,
-            )
+            with _progress.stage(f"design {t.name}, further removal"):
+                then = stabilise(
+                    m,
+                    target,
+                    max_rounds=spec.max_rounds,
+                    max_removal=1.0,
+                    smallest_set=spec.smallest_set,
+                    width=width,
+                    units=units,
+                )
         designs.append(DesignTrial(t.name, m, ids, area, f, meets(f, target), then))
     excavation = None
     if stages and spec.stages:
-        excavation = excavate_in_stages(
-            model, [Stage(s.name, **_removal_kw(s.remove)) for s in spec.stages]
-        )
+        with _progress.stage("excavation stages"):
+            excavation = excavate_in_stages(
+                model, [Stage(s.name, **_removal_kw(s.remove)) for s in spec.stages]
+            )
     return Study(target, comparison, tuple(designs), excavation)
 
 

@@ -19,14 +19,15 @@ from ..analysis import analyse, factor_of_safety
 from ..errors import InputError
 from ..model import Model
 from ..results import FactorOfSafety
-from . import _edit
+from ..units import Units
+from . import _edit, _progress
 
 __all__ = ["RemovalTrial", "Stabilisation", "meets", "rate", "stabilise"]
 
 
 def rate(model: Model, *, width: float = 0.01, largest: float = 20.0) -> FactorOfSafety:
     """Factor of safety of a design (strength reduction, bracket ``width``)."""
-    return factor_of_safety(model, width=width, largest=largest)
+    return factor_of_safety(model, width=width, largest=largest, progress=_progress.trial_hook())
 
 
 def meets(fos: FactorOfSafety, target: float) -> bool:
@@ -157,6 +158,7 @@ def stabilise(
     smallest_set: bool = True,
     width: float = 0.01,
     progress: Callable[[RemovalTrial], None] | None = None,
+    units: Units | None = None,
 ) -> Stabilisation:
     """Remove unstable blocks until the factor of safety reaches ``target_fos``.
 
@@ -178,6 +180,8 @@ def stabilise(
         Bracket width of every factor-of-safety search.
     progress : callable, optional
         Called with each :class:`RemovalTrial` as it is made.
+    units : Units, optional
+        The model's units (:func:`rockdem.units.parse_units`), named in the message.
 
     Returns
     -------
@@ -192,6 +196,7 @@ def stabilise(
         raise InputError("target factor of safety", f"{target_fos}", "give a value > 0")
     if not 0 < max_removal <= 1:
         raise InputError("max_removal", f"{max_removal}", "give a fraction in (0, 1]")
+    area_unit = f" {units.area}" if units is not None and units.known else ""
     area0 = _edit.free_area(model)
     trials: list[RemovalTrial] = []
 
@@ -199,6 +204,7 @@ def stabilise(
         ids, area = _edit.removed_between(model, m)
         t = RemovalTrial(len(trials), rnd, label, ids, area, fos, m, accepted)
         trials.append(t)
+        _progress.note(f"{label}: factor of safety {describe(fos)}")
         if progress is not None:
             progress(t)
         return t
@@ -245,7 +251,7 @@ def stabilise(
             trials,
             True,
             f"target {target_fos:g} reached by removing {n} blocks "
-            f"(area {final.removed_area:.3g}, "
+            f"(area {final.removed_area:.3g}{area_unit}, "
             f"{100 * final.removed_area / area0:.0f}% of the rock): "
             f"factor of safety {describe(final.fos)}",
         )

@@ -1,0 +1,113 @@
+"""Units for labels, read from a model's free-text ``units`` note.
+
+rockdem computes in whatever consistent units the model uses; the file says
+which in its ``units`` note ("kN, m, kPa (angles in degrees)", "t, m, t/m^2",
+"MN-m-MPa").  :func:`parse_units` reads a force and a length unit out of it
+(and a stress unit, or derives force/length^2), so that every force, stress,
+area and displacement printed can carry its unit.  A note that names no
+system (empty, "SI", "consistent") gives :data:`UNKNOWN`: labels stay bare.
+
+>>> u = parse_units("kN, m, kPa (angles in degrees)")
+>>> u.force, u.stress, u.area, u.label("force")
+('kN', 'kPa', 'm^2', 'kN')
+>>> parse_units("t, m").stress
+'t/m^2'
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+
+__all__ = ["UNKNOWN", "Units", "parse_units"]
+
+FORCES = ("N", "kN", "MN", "GN", "t", "tf", "kgf", "lbf", "kip", "kips")
+LENGTHS = ("m", "mm", "cm", "km", "ft", "in")
+#: stress units named as such (a "force/length^2" token is recognised too)
+STRESSES = ("Pa", "kPa", "MPa", "GPa", "psi", "psf", "ksi", "ksf")
+
+
+@dataclass(frozen=True)
+class Units:
+    """A force and a length unit, and the stress unit (None when not known)."""
+
+    force: str | None = None
+    length: str | None = None
+    stress: str | None = None
+
+    @property
+    def known(self) -> bool:
+        """True when the note named a force and a length unit."""
+        return self.force is not None and self.length is not None
+
+    @property
+    def area(self) -> str | None:
+        return f"{self.length}^2" if self.length else None
+
+    @property
+    def displacement(self) -> str | None:
+        return self.length
+
+    @property
+    def force_per_length(self) -> str | None:
+        return f"{self.force}/{self.length}" if self.known else None
+
+    @property
+    def unit_weight(self) -> str | None:
+        return f"{self.force}/{self.length}^3" if self.known else None
+
+    def unit(self, quantity: str) -> str | None:
+        """The unit of ``"force"``, ``"stress"``, ``"area"``, ``"length"``,
+        ``"displacement"``, ``"force_per_length"`` or ``"unit_weight"``."""
+        return getattr(self, quantity)
+
+    def label(self, quantity: str) -> str:
+        """The unit of ``quantity`` or ``""``."""
+        return self.unit(quantity) or ""
+
+    def suffix(self, quantity: str, fmt: str = " ({})") -> str:
+        """``" (kN)"`` for a heading, ``""`` when the unit is not known."""
+        u = self.unit(quantity)
+        return fmt.format(u) if u else ""
+
+    def __str__(self) -> str:
+        if not self.known:
+            return "units not stated"
+        return f"{self.force}, {self.length}, {self.stress}"
+
+
+UNKNOWN = Units()
+
+
+def _stress_token(tok: str) -> str | None:
+    """``"t/m^2"``, ``"t/m2"``, ``"kN/m²"`` ... as ``"force/length^2"``, or a named stress."""
+    if tok in STRESSES:
+        return tok
+    m = re.fullmatch(r"([A-Za-z]+)/([A-Za-z]+)(?:\^?2|²)", tok)
+    if m and m.group(1) in FORCES and m.group(2) in LENGTHS:
+        return f"{m.group(1)}/{m.group(2)}^2"
+    return None
+
+
+def parse_units(note: str | None) -> Units:
+    """The units a model's ``units`` note names.
+
+    The note is read up to its first parenthesis; its tokens are split at
+    commas, semicolons, blanks and hyphens.  The first force unit and the
+    first length unit make the system; the stress is the first stress token
+    ("kPa", "t/m^2"), else force/length^2.  Without both a force and a
+    length unit the result is :data:`UNKNOWN`.
+    """
+    if not note:
+        return UNKNOWN
+    text = note.split("(", 1)[0]
+    tokens = [t for t in re.split(r"[,;\s]+|(?<=[A-Za-z0-9])-(?=[A-Za-z])", text) if t]
+    force = next((t for t in tokens if t in FORCES), None)
+    lengths = [t for t in tokens if t in LENGTHS]
+    if len(lengths) > 1 and lengths[0] == "in":  # "units in kN and m": a word, not inches
+        lengths = lengths[1:]
+    length = lengths[0] if lengths else None
+    stress = next((s for s in map(_stress_token, tokens) if s), None)
+    if force is None or length is None:
+        return UNKNOWN
+    return Units(force, length, stress or f"{force}/{length}^2")
