@@ -65,3 +65,39 @@ def test_bedded_slope_failure_is_confirmed_by_the_second_method():
     assert fos.proof in {"lp-certificate", "dynamic-relaxation"}
     ev = fos.failed_analysis.evidence
     assert ev.relaxation is not None and "F = " in ev.relaxation
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("example", ["perpendicular-joints", "inclined-layers"])
+def test_the_mechanism_does_not_depend_on_the_trial_schedule(example):
+    """The seed paper's 6.1 and 6.2 slopes: the unstable blocks of the factor
+    of safety's failed end are the same for any growth factor and bracket
+    width (the late motion of dynamic relaxation from the last equilibrium),
+    and the same as the staged analysis finds at F = 1 (both slopes fail
+    there: FS 0.90 and tan30/tan35 = 0.82)."""
+    from rockdem.config import load_model
+    from rockdem.examples import example_path
+
+    system = rd.build_system(load_model(example_path(example))[0])
+    sets = []
+    for grow, width in [(1.5, 0.005), (1.3, 0.005), (2.0, 0.01)]:
+        fos = rd.factor_of_safety(system, grow=grow, width=width)
+        sets.append(frozenset(fos.failed_analysis.unstable_blocks.tolist()))
+    assert len(set(sets)) == 1 and len(sets[0]) >= 2
+    assert set(rd.analyse(system).unstable_blocks.tolist()) == sets[0]
+
+
+@pytest.mark.slow
+def test_bedded_slope_mechanism_slides_along_the_bedding_for_any_schedule():
+    """462-block slope, bedding dipping 30 deg: the same moving blocks for two
+    schedules, each moving down the bedding (median direction 30 +- 2 deg)."""
+    system = rd.build_system(V.bedding_slope(bedding_spacing=1.0, cross_spacing=1.5))
+    sets = []
+    for grow, width in [(1.5, 0.005), (2.0, 0.01)]:
+        failed = rd.factor_of_safety(system, grow=grow, width=width).failed_analysis
+        sets.append(frozenset(failed.unstable_blocks.tolist()))
+        mech = failed.mechanism[failed.unstable]
+        moving = np.hypot(mech[:, 0], mech[:, 1]) > 0.5
+        angle = np.degrees(np.arctan2(-mech[moving, 1], mech[moving, 0]))
+        assert np.median(angle) == pytest.approx(30.0, abs=2.0)
+    assert sets[0] == sets[1]

@@ -32,6 +32,8 @@ log = logging.getLogger(__name__)
 MAX_CASCADE = 100
 #: a block moves in the mechanism if its motion exceeds this share of the largest
 MECHANISM_SHARE = 0.01
+#: ... in the late motion of dynamic relaxation (the settling blocks still creep)
+RELAXATION_SHARE = 0.05
 #: a spring point holds when its strength exceeds its shear stress by this factor
 HOLD_MARGIN = 1.01
 #: a failed load step is retried in up to this many equal sub-steps (halving)
@@ -177,6 +179,41 @@ def _mechanism(system: System, sol: Solve, state, load_factor, factor):
     return out / top, motion > MECHANISM_SHARE * top
 
 
+def _slip_surface(system: System, unstable: np.ndarray, if_res) -> np.ndarray:
+    """Interfaces of the slip surface: failed or separating ones at moving blocks."""
+    faces = system.interfaces
+    moving = unstable[faces.block_a] | unstable[faces.block_b]
+    separating = unstable[faces.block_a] != unstable[faces.block_b]
+    return np.flatnonzero(moving & ((if_res.state > 0) | separating))
+
+
+def _relaxation_mechanism(system: System, failed: Analysis, run) -> Analysis:
+    """The mechanism as dynamic relaxation shows it, where it found one.
+
+    Beyond the limit the blocks of the mechanism keep moving while the rest
+    settle: the late motion of the run (its last quarter) is the failure
+    mechanism as UDEC draws it (velocities), computed from one state
+    (the last equilibrium) at one factor, so it does not depend on the
+    trial schedule or on where a Newton solve stopped.
+    """
+    if run is None or run.status != "mechanism" or run.late is None:
+        return failed
+    asm = system.assembly
+    late = run.late if np.dot(run.late, system.f_ext) >= 0 else -run.late
+    mech = np.zeros((system.blocks.n_blocks, 3))
+    free = ~system.blocks.fixed
+    mech[free] = late[asm.dof[free]]
+    size = np.sqrt(np.abs(system.blocks.area))
+    motion = np.hypot(mech[:, 0], mech[:, 1]) + np.abs(mech[:, 2]) * size
+    top = motion.max()
+    if not 0 < top < np.inf:
+        return failed
+    unstable = motion > RELAXATION_SHARE * top
+    mech = np.where(unstable[:, None], mech / top, 0.0)
+    slip = _slip_surface(system, unstable, failed.interfaces)
+    return replace(failed, mechanism=mech, unstable=unstable, slip_surface=slip)
+
+
 def _held(system: System, resp) -> np.ndarray:
     """Blocks joined to the fixed ground through holding interfaces.
 
@@ -229,13 +266,7 @@ def _package(system, sol, state, load_factor, factor, stable, steps, q_ok, near_
         stage = steps[-1].stage if steps else 0
         state = commit(system.springs, state, resp, ds, stage)
     sp_res, if_res = tabulate(system, state, resp, factor, system.model.settings.reduce_tensile)
-    if stable:
-        slip = np.zeros(0, dtype=np.int64)
-    else:
-        faces = system.interfaces
-        moving = unstable[faces.block_a] | unstable[faces.block_b]
-        separating = unstable[faces.block_a] != unstable[faces.block_b]
-        slip = np.flatnonzero(moving & ((if_res.state > 0) | separating))
+    slip = np.zeros(0, dtype=np.int64) if stable else _slip_surface(system, unstable, if_res)
     return Analysis(
         system,
         bool(stable),
@@ -310,7 +341,8 @@ def analyse(
             log.info("load step %d/%d: no equilibrium (%s)", k, n_steps, ev)
             failed = _package(system, sol, state, lam_prev, strength_factor, False, steps, q)
             failed = prove_in_region(system, failed, state, strength_factor)
-            return confirm_failed_analysis(system, failed, state, q, lam)
+            failed, run = confirm_failed_analysis(system, failed, state, q, lam)
+            return _relaxation_mechanism(system, failed, run)
     return _package(system, sol, state, lam_prev, strength_factor, True, steps, q)
 
 
@@ -451,7 +483,8 @@ def factor_of_safety(
     lo, hi = lo_an.strength_factor, hi_F
     if hi_an is not None and hi_an.evidence.certified is None:
         hi_an, trials = prove_failed_trial(system, hi_an, lo_an.state, hi, trials)
-        hi_an, trials = confirm_failed_trial(system, hi_an, lo_an, hi, trials)
+        hi_an, trials, run = confirm_failed_trial(system, hi_an, lo_an, hi, trials)
+        hi_an = _relaxation_mechanism(system, hi_an, run)
     return FactorOfSafety(
         0.5 * (lo + hi), (lo, hi), "strength", tuple(trials), lo_an, hi_an, _DEFINITION
     )

@@ -60,6 +60,8 @@ class Relaxation:
     steps: int
     ratio: float  # final unbalanced force / loads (scaled norms)
     motion: float  # largest scaled displacement over the last quarter, / elastic
+    #: displacements over the last quarter of the run (the late motion), if it ran that far
+    late: np.ndarray | None = None
 
     def __str__(self) -> str:
         return (
@@ -119,27 +121,26 @@ def relax(
         motion = float(np.max(np.abs((q - late_start) / scale))) / elastic
     moving = motion > MECHANISM_MOTION and late_low > STEADY_FORCE * tolerance
     status = "mechanism" if moving else "undecided"
-    return Relaxation(status, q, step, float(ratio), motion)
+    late = None if late_start is None else q - late_start
+    return Relaxation(status, q, step, float(ratio), motion, late)
 
 
 def confirm_failed_analysis(system, failed, state, q, load_factor: float):
-    """A failed staged analysis that the LP could not prove, checked by dynamic
-    relaxation at the load it failed to carry, from its last equilibrium
-    (``state``, ``q``): the statement goes into its evidence."""
-    if failed.evidence.certified:
-        return failed
+    """A failed staged analysis checked by dynamic relaxation at the load it
+    failed to carry, from its last equilibrium (``state``, ``q``): the
+    statement goes into its evidence.  Returns ``(analysis, run)``; the
+    run's late motion is the mechanism (also where the LP proved failure)."""
     run = relax(system, state, load_factor, failed.strength_factor, q)
-    return _with_relaxation(failed, f"{run} at load factor {load_factor:.4g}")
+    return _with_relaxation(failed, f"{run} at load factor {load_factor:.4g}"), run
 
 
 def confirm_failed_trial(system, failed, base, factor: float, trials):
-    """A failed strength trial that the LP could not prove, checked by dynamic
-    relaxation a little beyond the limit (``factor x (1 + margin)``),
-    from the last stable trial ``base``: a mechanism there is stated in the
-    failed trial's evidence (proof ``"dynamic-relaxation"``).  Right at the
-    limit the excess force is too small for the blocks to move visibly."""
-    if failed.evidence.certified:
-        return failed, trials
+    """A failed strength trial checked by dynamic relaxation a little beyond
+    the limit (``factor x (1 + margin)``), from the last stable trial
+    ``base``: a mechanism there is stated in the failed trial's evidence
+    (proof ``"dynamic-relaxation"`` unless the LP proved it).  Right at the
+    limit the excess force is too small for the blocks to move visibly.
+    Returns ``(analysis, trials, run)``."""
     asm = system.assembly
     free = ~system.blocks.fixed
     q0 = np.zeros(asm.n_dof)
@@ -154,7 +155,7 @@ def confirm_failed_trial(system, failed, base, factor: float, trials):
     trials = list(trials)
     last_failed = max(i for i, t in enumerate(trials) if not t.stable)
     trials[last_failed] = replace(trials[last_failed], evidence=failed.evidence)
-    return failed, trials
+    return failed, trials, run
 
 
 def _with_relaxation(failed, text: str):
