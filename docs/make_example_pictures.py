@@ -17,6 +17,7 @@ from rockdem.config import load_model
 from rockdem.examples import example_path
 from rockdem.geometry import JointSet, Profile, generate_slope
 from rockdem.plots import plot_failure
+from rockdem.results import format_factor
 from rockdem.stabilisation import Stage, excavate_in_stages, stabilise, trial_picture
 
 OUT = Path(__file__).parent / "img"
@@ -39,7 +40,8 @@ def wedge() -> None:
         a = rd.analyse(model)
         p1, p2 = cfg.joints["upper"].friction_angle, cfg.joints["lower"].friction_angle
         plot_failure(a, ax=ax, legend=False, title=f"phi1 = {p1:g}, phi2 = {p2:g}: "
-                     f"{a.verdict}, FS {fos.value:.3f}")
+                     f"{a.verdict} at F = {format_factor(a.strength_factor)}, "
+                     f"FS {fos.value:.3f}")
     save(fig, "examples-wedge.png")
 
 
@@ -68,9 +70,9 @@ def inclined_designs() -> None:
         more = (f"; then {len(d.then.removed_blocks)} more blocks: total area "
                 f"{d.total_removed_area:.2f}, FS {f.value:.2f}") if d.then else ""
         plot_failure(shown, ax=ax, legend=False,
-                     title=f"{d.name}: area {d.removed_area:.2f} removed, "
-                           f"{'stable' if d.reached else 'unstable'}\n(FS {d.fos.value:.3f})"
-                           + more)
+                     title=f"{d.name}: area {d.removed_area:.2f} m^2 removed, "
+                           f"{'stable' if d.reached else 'unstable'}\n(FS {d.fos.value:.3f}; "
+                           f"state at F = {format_factor(shown.strength_factor)})" + more)
     save(fig, "examples-inclined-layers-designs.png")
 
 
@@ -88,7 +90,8 @@ def stages() -> None:
     for ax, s in zip(axes, ex.stages, strict=True):
         plot_failure(s.analysis, ax=ax, legend=s.number == 0,
                      title=f"stage {s.number}: {s.name}\n{len(s.new_failures)} joints failed "
-                           f"in this stage ({'stable' if s.stable else 'unstable'})")
+                           f"in this stage ({'stable' if s.stable else 'unstable'} at "
+                           f"F = {format_factor(s.analysis.strength_factor)})")
     save(fig, "examples-stages.png")
 
 
