@@ -317,9 +317,10 @@ def plot(
 
     model: the blocks, joints and loads (no analysis).  deformed, stress: the
     staged analysis at F = 1.  failure, mechanism, progressive, animation:
-    the state just above the factor of safety (the mechanism), found with the
-    model file's strength-reduction settings.  fos: the strength-reduction
-    trials.  Prints the path of the file.
+    the failed end of the strength-reduction search (the mechanism; the title
+    names its factor F and the factor of safety), found with the model file's
+    strength-reduction settings.  fos: the strength-reduction trials.  Prints
+    the path of the file.
     \f
     Parameters
     ----------

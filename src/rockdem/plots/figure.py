@@ -71,7 +71,8 @@ def plot_figure(model_or_result, what: str, out_file, *, dpi: int = 150, **optio
     model_or_result : Model, Analysis or FactorOfSafety
         A model is analysed as needed: ``"failure"``, ``"mechanism"`` and
         ``"progressive"`` run the factor-of-safety search (so a stable slope
-        shows the mechanism just above its factor of safety); ``"deformed"``
+        shows the mechanism of its failed end, at the factor that analysis
+        reports); ``"deformed"``
         and ``"stress"`` run one staged analysis.
     what : str
         One of :data:`WHAT`.
