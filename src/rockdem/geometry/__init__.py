@@ -26,15 +26,19 @@ from .cut import generate_slope, section_polygon
 from .edit import add_blocks, cut_to_profile, excavate, remove_blocks
 from .joint_sets import JointSet
 from .profile import Profile
+from .size import MAX_BLOCKS, SizeEstimate, estimate_size
 from .slope import Sliver, SlopeGeometry
 
 __all__ = [
+    "MAX_BLOCKS",
     "JointSet",
     "Profile",
+    "SizeEstimate",
     "Sliver",
     "SlopeGeometry",
     "add_blocks",
     "cut_to_profile",
+    "estimate_size",
     "excavate",
     "generate_slope",
     "remove_blocks",

@@ -35,6 +35,7 @@ from ..joints import Joint
 from . import _topology as topo
 from .joint_sets import JointSet
 from .profile import Profile
+from .size import MAX_BLOCKS, check_size, estimate_size
 from .slope import Sliver, SlopeGeometry
 
 __all__ = ["generate_slope", "section_polygon"]
@@ -75,6 +76,7 @@ def generate_slope(
     min_block_fraction: float = 0.05,
     slivers: str = "merge",
     seed: int = 0,
+    max_blocks: int | None = MAX_BLOCKS,
 ) -> SlopeGeometry:
     """Cut a slope section into blocks with joint sets.
 
@@ -111,6 +113,9 @@ def generate_slope(
         and only report them (``SlopeGeometry.slivers``).
     seed : int
         Seed of the random variation of sets without their own seed.
+    max_blocks : int or None
+        Refuse, before cutting anything, a slope estimated to make more
+        blocks than this (see :mod:`rockdem.geometry.size`); None: no limit.
 
     Returns
     -------
@@ -120,7 +125,8 @@ def generate_slope(
     ------
     InputError
         Bad profile, depth, set names, a set that misses the section, a
-        missing ``bridge_joint``, an unknown boundary side.
+        missing ``bridge_joint``, an unknown boundary side, a slope estimated
+        larger than ``max_blocks``.
 
     Examples
     --------
@@ -166,6 +172,7 @@ def generate_slope(
                          "give at least one JointSet or a ground_joint")
 
     section = section_polygon(profile, depth)
+    check_size(estimate_size(section, sets), max_blocks, section)
     xmin, ymin, xmax, ymax = section.bounds
     extent = math.hypot(xmax - xmin, ymax - ymin)
     tol = GEOMETRY_RTOL * extent
