@@ -18,6 +18,11 @@ from .errors import InputError
 
 #: Relative tolerance of geometric tests, as a fraction of the model's extent.
 GEOMETRY_RTOL = 1e-8
+#: Largest unit weight (beyond it forces overflow in the squares of the solver).
+MAX_UNIT_WEIGHT = 1e9
+#: A block farther than this many typical block sizes from the others makes every
+#: block degenerate under the model-relative tolerance: it is refused by name.
+MAX_SPREAD = 1e7
 
 
 @dataclass(frozen=True, eq=False, repr=False)
@@ -102,10 +107,16 @@ class Blocks:
         for i, poly in enumerate(polygons):
             xy = _as_vertices(poly, i)
             rings.append(xy)
-        ids_arr = np.arange(n) if ids is None else np.asarray(ids, dtype=np.int64)
+        try:
+            ids_arr = np.arange(n) if ids is None else np.asarray(ids, dtype=np.int64)
+        except (OverflowError, TypeError, ValueError):
+            raise InputError(
+                "block ids", "must be whole numbers within 64 bits", "renumber the blocks"
+            ) from None
         if ids_arr.shape != (n,) or len(np.unique(ids_arr)) != n:
             raise InputError("block ids", "must be one unique integer per block", "renumber")
         label = {i: int(ids_arr[i]) for i in range(n)}
+        _check_spread(rings, label)
         extent = _extent(np.concatenate(rings))
         tol = GEOMETRY_RTOL * extent
         clean = []
@@ -116,12 +127,12 @@ class Blocks:
         vertices = np.concatenate(clean)
         fixed_arr = np.broadcast_to(np.asarray(fixed, dtype=bool), (n,)).copy()
         gamma = np.broadcast_to(np.asarray(unit_weight, dtype=float), (n,)).copy()
-        bad = np.flatnonzero(~np.isfinite(gamma) | (gamma < 0))
+        bad = np.flatnonzero(~np.isfinite(gamma) | (gamma < 0) | (gamma > MAX_UNIT_WEIGHT))
         if bad.size:
             raise InputError(
                 f"block {label[int(bad[0])]}",
-                f"unit weight {gamma[bad[0]]} is negative or not finite",
-                "give a unit weight >= 0",
+                f"unit weight {gamma[bad[0]]:g} is out of range",
+                f"give a unit weight from 0 to {MAX_UNIT_WEIGHT:g}",
             )
         _check_rings(vertices, offsets, label)
         area, _ = _area_centroid(vertices, offsets)
@@ -236,6 +247,31 @@ def _as_vertices(poly, i: int) -> np.ndarray:
     # a closing vertex equal to the first is dropped by _clean_ring, with a
     # tolerance relative to the model's size (never to the coordinates' size)
     return xy.astype(float)
+
+
+def _check_spread(rings: list[np.ndarray], label) -> None:
+    """Refuse a block lying so far from the others that the model-relative tolerance
+    would make every block degenerate; name that block (not the first one)."""
+    if len(rings) < 2:
+        return
+    lo = np.array([r.min(axis=0) for r in rings])
+    hi = np.array([r.max(axis=0) for r in rings])
+    centre = lo + 0.5 * (hi - lo)
+    size = np.hypot(*(hi - lo).T)
+    typical = float(np.median(size))
+    if not typical > 0:
+        return
+    middle = np.median(centre, axis=0)
+    dist = np.hypot(*(centre - middle).T)
+    far = int(np.argmax(dist))
+    if dist[far] > MAX_SPREAD * typical:
+        x, y = centre[far]
+        raise InputError(
+            f"block {label[far]}",
+            f"lies {dist[far]:.3g} from the other blocks (at ({x:.6g}, {y:.6g}); typical block "
+            f"size {typical:.3g})",
+            "check its coordinates (all blocks in one coordinate system)",
+        )
 
 
 def _clean_ring(xy: np.ndarray, tol: float, where: str) -> np.ndarray:

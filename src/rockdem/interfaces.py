@@ -73,7 +73,7 @@ def find_interfaces(blocks: Blocks) -> Interfaces:
     Raises
     ------
     InputError
-        If a free block touches no other block.
+        If a free block touches no other block (see also :func:`check_held`).
     """
     p, q, owner = blocks.edges()
     tol = blocks.tolerance
@@ -119,6 +119,57 @@ def _check_connected(blocks: Blocks, faces: Interfaces) -> None:
             "touches no other block along an edge (it would float)",
             "move it onto its neighbours, make it fixed, or remove it",
         )
+
+
+def check_held(blocks: Blocks, faces: Interfaces | None = None) -> None:
+    """Every free block must reach a fixed block through interfaces.
+
+    A group of free blocks touching only one another (or a model without a
+    fixed block) is held by nothing: its stiffness is singular.  This names
+    the blocks and the fix, where the solver could only report a singular
+    matrix.
+
+    Raises
+    ------
+    InputError
+        Naming the free blocks that nothing holds (the first 12).
+    """
+    if faces is None:
+        faces = find_interfaces(blocks)
+    if not (~blocks.fixed).any():
+        return
+    loose = _unheld(blocks, faces)
+    if not loose.size:
+        return
+    ids = ", ".join(str(int(i)) for i in blocks.ids[loose[:12]])
+    if loose.size > 12:
+        ids += f", ... ({loose.size - 12} more)"
+    if not blocks.fixed.any():
+        raise InputError(
+            f"blocks {ids}",
+            "are held by nothing: no block is fixed",
+            "make the ground blocks fixed (`fixed: true`), or give the slope a fixed boundary",
+        )
+    raise InputError(
+        f"blocks {ids}",
+        "are held by nothing: they touch one another but no fixed block",
+        "connect them to the ground along an edge, make one of them fixed, or remove them",
+    )
+
+
+def _unheld(blocks: Blocks, faces: Interfaces) -> np.ndarray:
+    """Positions of the free blocks that no chain of interfaces joins to a fixed block."""
+    import scipy.sparse as sp
+    from scipy.sparse.csgraph import connected_components
+
+    n = blocks.n_blocks
+    ground = n  # one node stands for all fixed blocks
+    a = np.where(blocks.fixed[faces.block_a], ground, faces.block_a)
+    b = np.where(blocks.fixed[faces.block_b], ground, faces.block_b)
+    graph = sp.coo_array((np.ones(len(a)), (a, b)), shape=(n + 1, n + 1))
+    _, label = connected_components(graph, directed=False)
+    held = label[:n] == label[ground]
+    return np.flatnonzero(~held & ~blocks.fixed)
 
 
 def assign_joints(

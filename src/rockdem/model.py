@@ -85,6 +85,13 @@ class Loads:
         object.__setattr__(self, "lines", tuple(self.lines))
 
 
+#: Most load steps and Newton iterations per solve (every count of work is bounded).
+MAX_LOAD_STEPS = 1000
+MAX_ITERATIONS = 1000
+#: Range of the equilibrium tolerance: below 1e-12 round-off decides, not equilibrium.
+TOLERANCE_RANGE = (1e-12, 1e-2)
+
+
 @dataclass(frozen=True)
 class Settings:
     """How the equations are integrated and solved.
@@ -116,12 +123,19 @@ class Settings:
     reduce_tensile: bool = True
 
     def __post_init__(self) -> None:
-        if self.load_steps < 1:
-            raise InputError("settings load_steps", f"{self.load_steps}", "use 1 or more steps")
-        if not 0 < self.tolerance < 1e-2:
-            raise InputError("settings tolerance", f"{self.tolerance}", "use 1e-12 to 1e-3")
-        if self.max_iterations < 1:
-            raise InputError("settings max_iterations", f"{self.max_iterations}", "use >= 1")
+        for key, top in (("load_steps", MAX_LOAD_STEPS), ("max_iterations", MAX_ITERATIONS)):
+            value = getattr(self, key)
+            if isinstance(value, bool) or not isinstance(value, int | np.integer):
+                raise InputError(
+                    f"settings {key}", f"{value!r} is not a whole number", f"use 1 to {top}"
+                )
+            if not 1 <= value <= top:
+                raise InputError(f"settings {key}", f"{value} is out of range", f"use 1 to {top}")
+        lo, hi = TOLERANCE_RANGE
+        if not lo <= self.tolerance < hi:
+            raise InputError(
+                "settings tolerance", f"{self.tolerance} is out of range", f"use {lo:g} to < {hi:g}"
+            )
 
 
 @dataclass(frozen=True)
