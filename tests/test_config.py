@@ -231,7 +231,7 @@ def test_error_names_file_line_key_and_fix():
     assert exc.source == "slope.yaml" and exc.line == 5
     assert exc.key == "joints.bedding.friction_angle"
     assert str(exc) == ("slope.yaml:5: joints.bedding.friction_angle: 95 is out of range; "
-                        "give a value < 90")
+                        "give a value >= 0 and < 90")
     assert isinstance(exc, rd.InputError)
 
 

@@ -9,7 +9,7 @@ Every problem with a file is raised as a :class:`ModelFileError` that names
 the file, the line (YAML only) and the key path, says what is wrong and how
 to fix it, in one line::
 
-    slope.yaml:12: joints.bedding.friction_angle: 95 is out of range; give a value < 90
+    slope.yaml:12: joints.bedding.friction_angle: 95 is out of range; give a value >= 0 and < 90
 
 The package is split by stage: :mod:`~rockdem.config.values`,
 :mod:`~rockdem.config.sections`, :mod:`~rockdem.config.settings` and

@@ -6,21 +6,31 @@ generated slope, removal, loads and supports."""
 
 from __future__ import annotations
 
-from typing import Annotated, Literal
+from typing import Literal
 
 from pydantic import Field, model_validator
 
 from .values import (
-    _AS_NUMBER,
     Angle,
     Dip,
+    DipDeviation,
+    Direction,
+    Extent,
+    FaceAngle,
     Fraction,
     Integer,
-    NonNegative,
-    Number,
+    Length,
+    Magnitude,
     Point,
     Polygon,
-    Positive,
+    Seed,
+    Seismic,
+    Share,
+    Stiffness,
+    StiffnessRatio,
+    Stress,
+    UnitWeight,
+    Vector,
     _Section,
 )
 
@@ -28,7 +38,7 @@ from .values import (
 class MaterialSpec(_Section):
     """A rock material (referred to by name from blocks and slopes)."""
 
-    unit_weight: NonNegative
+    unit_weight: UnitWeight
     """Weight per unit volume x the section's thickness (for example 26 kN/m^3 for a
     1 m slice); weight = unit_weight x block area."""
     description: str = ""
@@ -38,25 +48,25 @@ class MaterialSpec(_Section):
 class JointSpec(_Section):
     """Strength and stiffness of one kind of interface (joint set, rock bridge, ground)."""
 
-    normal_stiffness: Positive
+    normal_stiffness: Stiffness
     """kn: normal stiffness per unit length per unit closure (for example kN/m^2/m).
     Choose it large against the loads; its value hardly changes collapse results."""
     friction_angle: Angle
     """Peak friction angle in degrees, 0 <= phi < 90."""
-    cohesion: NonNegative = 0.0
+    cohesion: Stress = 0.0
     """Peak cohesion (stress), >= 0."""
-    tensile_strength: NonNegative = 0.0
+    tensile_strength: Stress = 0.0
     """Tension cut-off (stress), >= 0; 0 means an open joint that carries no tension."""
-    shear_stiffness: Positive | None = None
+    shear_stiffness: Stiffness | None = None
     """ks; default normal_stiffness / stiffness_ratio."""
-    stiffness_ratio: Positive = 2.5
+    stiffness_ratio: StiffnessRatio = 2.5
     """kn / ks used when shear_stiffness is not given (2 to 3 for rock)."""
-    residual_cohesion: NonNegative | None = 0.0
+    residual_cohesion: Stress | None = 0.0
     """Cohesion after a point has yielded; default 0 (brittle). null keeps the peak
     cohesion (ductile)."""
     residual_friction_angle: Angle | None = None
     """Friction angle after yield; default (null) the peak friction angle."""
-    residual_tensile_strength: NonNegative | None = 0.0
+    residual_tensile_strength: Stress | None = 0.0
     """Tensile strength after a point has yielded in shear; default 0. null keeps
     tensile_strength (ductile). A point broken in tension never carries tension again."""
     description: str = ""
@@ -72,7 +82,7 @@ class BlockSpec(_Section):
     """True for immobile ground (no unit weight needed)."""
     material: str | None = None
     """Name of a material in `materials` (gives the unit weight)."""
-    unit_weight: NonNegative | None = None
+    unit_weight: UnitWeight | None = None
     """Unit weight of this block (instead of `material`)."""
     id: Integer | None = None
     """Label reported in results; default the block's position in the list (0, 1, ...)."""
@@ -121,20 +131,18 @@ class ProfileSpec(_Section):
 
     points: list[Point] | None = Field(default=None, min_length=2)
     """Surface points `[[x, y], ...]` from left (crest side) to right (toe side)."""
-    height: Positive | None = None
+    height: Length | None = None
     """Simple slope: height from toe to crest."""
-    face_angle: Annotated[float, Field(gt=0.0, le=90.0, allow_inf_nan=False), _AS_NUMBER] | None = (
-        None
-    )
+    face_angle: FaceAngle | None = None
     """Simple slope: inclination of the face in degrees (0 < angle <= 90)."""
-    crest_length: Positive | None = None
+    crest_length: Length | None = None
     """Simple slope: length of the flat ground behind the crest (default: the height)."""
-    toe_length: Positive | None = None
+    toe_length: Length | None = None
     """Simple slope: length of the flat ground in front of the toe (default: half the
     height)."""
-    bench_width: NonNegative = 0.0
+    bench_width: Extent = 0.0
     """Simple slope: width of benches (0: no benches)."""
-    bench_height: Positive | None = None
+    bench_height: Length | None = None
     """Simple slope: vertical distance between benches, counted up from the toe
     (needed when bench_width > 0)."""
     toe: Point = (0.0, 0.0)
@@ -156,25 +164,25 @@ class JointSetSpec(_Section):
     dip: Dip
     """Dip in degrees, 0 <= dip < 180 (trace along (cos dip, -sin dip); dip < 90 dips
     out of the face)."""
-    spacing: Positive
+    spacing: Length
     """Mean distance between joints, measured normal to them."""
     joint: str | None = None
     """Name of the joint properties in `joints`; default the set's own name."""
     origin: Point = (0.0, 0.0)
     """A point one joint of the set passes through."""
-    trace_length: Positive | None = None
+    trace_length: Length | None = None
     """Length of each joint trace (null: persistent joints across the slope)."""
-    gap: NonNegative = 0.0
+    gap: Extent = 0.0
     """Length of the rock bridges between traces of non-persistent joints (needs
     `slope.bridge_joint`)."""
-    stagger: Annotated[float, Field(ge=0.0, le=1.0, allow_inf_nan=False), _AS_NUMBER] = 0.0
+    stagger: Share = 0.0
     """Shift of the trace pattern from one joint to the next, as a fraction of
     trace_length + gap."""
-    spacing_sd: NonNegative = 0.0
+    spacing_sd: Extent = 0.0
     """Standard deviation of the spacing (0: regular)."""
-    dip_sd: NonNegative = 0.0
+    dip_sd: DipDeviation = 0.0
     """Standard deviation of the dip in degrees (0: all parallel)."""
-    seed: Integer | None = None
+    seed: Seed | None = None
     """Random seed of this set (default: from `slope.seed`)."""
 
 
@@ -187,15 +195,15 @@ class SlopeSpec(_Section):
     """Joint sets by name (at least one)."""
     material: str | None = None
     """Material of the rock mass (default: the only one in `materials`)."""
-    unit_weight: NonNegative | None = None
+    unit_weight: UnitWeight | None = None
     """Unit weight of the rock mass (instead of `material`)."""
-    depth: Positive
+    depth: Length
     """Depth of the modelled rock below the lowest profile point."""
-    behind: NonNegative = 0.0
+    behind: Extent = 0.0
     """Horizontal ground added behind (left of) the profile's first point."""
     boundary: list[Literal["base", "back", "front"]] = ["base", "back", "front"]
     """Sides of the section backed by a fixed strip of ground ([] for none)."""
-    ground_thickness: Positive | None = None
+    ground_thickness: Length | None = None
     """Thickness of the fixed strips (default 10% of the larger section size)."""
     bridge_joint: str | None = None
     """Joint (name in `joints`) for the rock bridges between non-persistent joints."""
@@ -206,7 +214,7 @@ class SlopeSpec(_Section):
     slivers: Literal["merge", "report"] = "merge"
     """Merge each sliver into the neighbour sharing its longest edge, or keep it and
     only report it."""
-    seed: Integer = 0
+    seed: Seed = 0
     """Random seed of the joint generation (reproducible models)."""
 
 
@@ -228,7 +236,7 @@ class PointLoadSpec(_Section):
 
     at: Point
     """Point of application `[x, y]`."""
-    force: Point
+    force: Vector
     """Force `[fx, fy]` (y up: a downward load has fy < 0)."""
     name: str = ""
     """Label reported with results."""
@@ -241,7 +249,7 @@ class LineLoadSpec(_Section):
     """First end of the loaded segment."""
     end: Point
     """Second end of the loaded segment."""
-    q: Point
+    q: Vector
     """Traction `[qx, qy]`, force per unit length (y up)."""
     name: str = ""
     """Label reported with results."""
@@ -252,9 +260,9 @@ class LoadsSpec(_Section):
 
     gravity: bool = True
     """Apply the self-weight of the blocks."""
-    seismic_h: Annotated[float, Field(gt=-1.0, lt=1.0, allow_inf_nan=False), _AS_NUMBER] = 0.0
+    seismic_h: Seismic = 0.0
     """Pseudo-static horizontal coefficient kh: a force kh x W toward +x (out of the face)."""
-    seismic_v: Annotated[float, Field(gt=-1.0, lt=1.0, allow_inf_nan=False), _AS_NUMBER] = 0.0
+    seismic_v: Seismic = 0.0
     """Pseudo-static vertical coefficient kv: a force kv x W downward."""
     points: list[PointLoadSpec] = []
     """Point loads."""
@@ -267,9 +275,9 @@ class SupportSpec(_Section):
 
     at: Point
     """Point of application on the face `[x, y]`."""
-    force: Positive
+    force: Magnitude
     """Magnitude of the support force."""
-    angle: Number
+    angle: Direction
     """Direction in degrees counter-clockwise from +x (for example 165 pulls into a
     face looking toward +x, 15 degrees below horizontal)."""
     name: str = ""

@@ -6,32 +6,62 @@ reduction and the stabilisation design."""
 
 from __future__ import annotations
 
+import math
 from typing import Annotated, Literal
 
 from pydantic import Field, model_validator
 
+from ..model import MAX_ITERATIONS, MAX_LOAD_STEPS, TOLERANCE_RANGE
 from .sections import RemoveSpec
-from .values import _AS_INTEGER, _AS_NUMBER, Number, Point, Positive, _Section
+from .values import Direction, Magnitude, Point, _Section, bounded, whole
+
+#: Most strength-reduction trials the settings may allow (each is a full analysis).
+MAX_TRIALS = 100
+#: Most stabilisation rounds, and designs and stages.
+MAX_ROUNDS = 50
+MAX_DESIGNS = 50
+
+Factor = bounded(1e-6, 1e6)
+
+
+def trial_bound(width: float, start: float, grow: float, smallest: float, largest: float) -> int:
+    """Most trials a strength-reduction search with these settings can take.
+
+    Down from ``start`` to ``smallest`` or up to ``largest`` by ``grow``,
+    then bisection (two trials each) of a bracket at most ``largest x (grow - 1)``
+    wide down to ``width``.
+    """
+    log_grow = math.log(grow)
+    down = math.ceil(math.log(max(start / smallest, 1.0)) / log_grow)
+    up = math.ceil(math.log(max(largest / start, 1.0)) / log_grow)
+    halvings = math.ceil(math.log2(max(largest * (grow - 1.0) / width, 1.0)))
+    return 1 + max(down, up) + 2 * halvings
 
 
 class StrengthReductionSpec(_Section):
     """Settings of the factor of safety by strength reduction (`rockdem fos`)."""
 
-    width: Positive = 0.005
+    width: bounded(1e-6, 1.0) = 0.005
     """Stop when the bracket [stable, unstable] is narrower than this."""
-    start: Positive = 1.0
+    start: Factor = 1.0
     """First trial factor."""
-    grow: Annotated[float, Field(gt=1.0, allow_inf_nan=False), _AS_NUMBER] = 1.5
+    grow: bounded(1.0, 100.0, open_lo=True) = 1.5
     """Factor between trials while no failure has been found."""
-    smallest: Positive = 0.05
+    smallest: Factor = 0.05
     """Give up (strength-independent mechanism) below this factor."""
-    largest: Positive = 100.0
+    largest: Factor = 100.0
     """Give up (no failure) above this factor."""
 
     @model_validator(mode="after")
     def _order(self) -> StrengthReductionSpec:
         if not self.smallest < self.start < self.largest:
             raise ValueError("needs smallest < start < largest")
+        n = trial_bound(self.width, self.start, self.grow, self.smallest, self.largest)
+        if n > MAX_TRIALS:
+            raise ValueError(
+                f"these settings allow up to {n} trials, more than {MAX_TRIALS}: "
+                "use a larger `grow` or `width`, or a narrower smallest..largest"
+            )
         return self
 
 
@@ -41,13 +71,13 @@ class AnalysisSpec(_Section):
     quadrature: Literal["lobatto", "gauss"] = "lobatto"
     """Spring point rule along each interface: lobatto (includes the ends, exact
     pivoting) or gauss (2 points = the seed paper's lumped springs)."""
-    points_per_interface: Annotated[int, Field(ge=2, le=5), _AS_INTEGER] = 3
+    points_per_interface: whole(2, 5) = 3
     """Spring points per interface (3 with lobatto is Simpson's rule)."""
-    load_steps: Annotated[int, Field(ge=1), _AS_INTEGER] = 5
+    load_steps: whole(1, MAX_LOAD_STEPS) = 5
     """Increments in which the loads are applied (staged gravity)."""
-    tolerance: Annotated[float, Field(gt=0.0, lt=1e-2, allow_inf_nan=False), _AS_NUMBER] = 1e-8
+    tolerance: bounded(*TOLERANCE_RANGE, open_hi=True) = 1e-8
     """Equilibrium when the out-of-balance force is below tolerance x the external force."""
-    max_iterations: Annotated[int, Field(ge=1), _AS_INTEGER] = 100
+    max_iterations: whole(1, MAX_ITERATIONS) = 100
     """Newton iterations per solve before a step is declared failed."""
     reduce_tensile: bool = True
     """Divide the tensile strength by the trial factor in strength reduction too."""
@@ -74,10 +104,10 @@ class SupportSearchSpec(_Section):
     at: Point | None = None
     """Point of application on the face `[x, y]` (default: the free surface of the
     critical mechanism, nearest its centroid)."""
-    angle: Number = 195.0
+    angle: Direction = 195.0
     """Direction of the force on the rock in degrees counter-clockwise from +x (195:
     into the slope, 15 degrees below horizontal, as a down-dipping anchor pulls)."""
-    largest: Positive | None = None
+    largest: Magnitude | None = None
     """Give up above this force (default: twice the weight of the free rock)."""
 
 
@@ -93,11 +123,11 @@ class StageSpec(_Section):
 class StabilisationSpec(_Section):
     """Settings of `rockdem stabilise`: target, designs to compare, excavation stages."""
 
-    target_fos: Positive = 1.3
+    target_fos: bounded(0.0, 20.0, open_lo=True) = 1.3
     """Factor of safety the stabilisation must reach."""
-    max_rounds: Annotated[int, Field(ge=1), _AS_INTEGER] = 6
+    max_rounds: whole(1, MAX_ROUNDS) = 6
     """Block-removal rounds before giving up."""
-    max_removal: Annotated[float, Field(gt=0.0, le=1.0, allow_inf_nan=False), _AS_NUMBER] = 0.3
+    max_removal: bounded(0.0, 1.0, open_lo=True) = 0.3
     """Largest share of the free rock (by area) that block removal may take."""
     smallest_set: bool = True
     """Look for a smaller set among the mechanism blocks (from the top down) when
@@ -107,7 +137,7 @@ class StabilisationSpec(_Section):
     with the other measures."""
     support: SupportSearchSpec | None = None
     """Where to try a support force (null: on the critical mechanism, angle 195)."""
-    trials: list[TrialSpec] = []
+    trials: Annotated[list[TrialSpec], Field(max_length=MAX_DESIGNS)] = []
     """Removal designs to rate side by side (each from the model as it is)."""
-    stages: list[StageSpec] = []
+    stages: Annotated[list[StageSpec], Field(max_length=MAX_DESIGNS)] = []
     """Excavation stages, analysed in order carrying the joint state forward."""

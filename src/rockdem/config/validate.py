@@ -9,6 +9,7 @@ import typing
 from typing import Annotated, Any
 
 from pydantic import BaseModel, ValidationError
+from pydantic.fields import FieldInfo
 
 from .errors import Loc, ModelFileError, _keypath, _kind, _line
 from .spec import ModelFile
@@ -45,23 +46,75 @@ def _unwrap(tp: Any) -> Any:
             return tp
 
 
-def _type_at(loc: Loc) -> Any:
-    """The annotation of the value at ``loc`` in :class:`ModelFile` (None if unknown)."""
+def _annotation_at(loc: Loc) -> tuple[Any, list]:
+    """The annotation of the value at ``loc`` in :class:`ModelFile` (None if unknown),
+    and the constraints pydantic took out of it (for a field)."""
     tp: Any = ModelFile
+    meta: list = []
     for part in loc:
         tp = _unwrap(tp)
+        meta = []
         if isinstance(tp, type) and issubclass(tp, BaseModel):
             field = tp.model_fields.get(str(part))
             if field is None:
-                return None
-            tp = field.annotation
+                return None, []
+            tp, meta = field.annotation, list(field.metadata)
         elif typing.get_origin(tp) is dict:
             tp = typing.get_args(tp)[1]
         elif typing.get_origin(tp) in (list, tuple):
             tp = typing.get_args(tp)[0]
         else:
-            return None
-    return _unwrap(tp)
+            return None, []
+    return tp, meta
+
+
+def _type_at(loc: Loc) -> Any:
+    """The annotation of the value at ``loc`` in :class:`ModelFile` (None if unknown)."""
+    tp, _ = _annotation_at(loc)
+    return None if tp is None else _unwrap(tp)
+
+
+def _bounds(loc: Loc) -> dict[str, float]:
+    """The range constraints (gt, ge, lt, le) of the value at ``loc``."""
+    tp, items = _annotation_at(loc)
+    todo = [tp]
+    while todo:
+        t = todo.pop()
+        origin = typing.get_origin(t)
+        if origin is Annotated:
+            args = typing.get_args(t)
+            todo.append(args[0])
+            items.extend(args[1:])
+        elif origin in (typing.Union, types.UnionType):
+            todo.extend(typing.get_args(t))
+    out: dict[str, float] = {}
+    for item in items:
+        for c in item.metadata if isinstance(item, FieldInfo) else [item]:
+            for attr in ("gt", "ge", "lt", "le"):
+                value = getattr(c, attr, None)
+                if isinstance(value, int | float):
+                    out[attr] = value
+    return out
+
+
+def _range(loc: Loc, kind: str, bound: Any) -> str:
+    """``give a value >= lo and <= hi``: the whole range of the key, not only the side
+    that was crossed."""
+    ops = {"gt": ">", "ge": ">=", "lt": "<", "le": "<="}
+    found = _bounds(loc)
+    key = {
+        "greater_than": "gt",
+        "greater_than_equal": "ge",
+        "less_than": "lt",
+        "less_than_equal": "le",
+    }[kind]
+    found.setdefault(key, bound)
+    parts = [
+        f"{ops[k]} {found[k]}" if isinstance(found[k], int) else f"{ops[k]} {found[k]:g}"
+        for k in ("gt", "ge", "lt", "le")
+        if k in found
+    ]
+    return "give a value " + " and ".join(parts)
 
 
 def _field_doc(loc: Loc) -> str:
@@ -91,14 +144,8 @@ def _describe(err: dict) -> tuple[Loc, str, str]:
         fix = f"add `{loc[-1]}:`" + (f" ({doc})" if doc else "")
         return loc, "required key is missing", fix
     if kind in ("greater_than", "greater_than_equal", "less_than", "less_than_equal"):
-        op = {
-            "greater_than": ">",
-            "greater_than_equal": ">=",
-            "less_than": "<",
-            "less_than_equal": "<=",
-        }[kind]
         bound = next(iter(ctx.values()))
-        return loc, f"{shown} is out of range", f"give a value {op} {bound:g}"
+        return loc, f"{shown} is out of range", _range(loc, kind, bound)
     if kind == "number_with_unit":
         fix = "write the bare number in the units stated in `units` (angles in degrees)"
         return loc, err["msg"], fix
