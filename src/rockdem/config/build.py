@@ -5,12 +5,15 @@ from __future__ import annotations
 
 import math
 import re
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from ..errors import InputError
+from ..geometry.size import MAX_BLOCKS, memory_for
+from ..interfaces import check_held
 from .errors import Loc, ModelFileError, _keypath, _line
 from .sections import ProfileSpec
 from .spec import ModelFile
@@ -90,12 +93,19 @@ def _settings(cfg: ModelFile):
     )
 
 
-def _joint_lines(cfg: ModelFile, vertices: np.ndarray) -> np.ndarray:
+def _joint_lines(cfg: ModelFile, vertices: np.ndarray, tol: float) -> np.ndarray:
     lo, hi = vertices.min(axis=0), vertices.max(axis=0)
     centre, size = 0.5 * (lo + hi), float(np.hypot(*(hi - lo))) or 1.0
     segments = []
-    for line in cfg.joint_lines:
+    for i, line in enumerate(cfg.joint_lines):
         if line.start is not None:
+            length = math.dist(line.start, line.end)
+            if length <= tol:
+                raise InputError(
+                    f"joint_lines {i}",
+                    f"has zero length (start and end {length:.3g} apart)",
+                    "give two different end points, or `point` and `dip` for a whole line",
+                )
             segments.append([line.start, line.end])
         else:
             p = np.asarray(line.point, dtype=float)
@@ -106,15 +116,28 @@ def _joint_lines(cfg: ModelFile, vertices: np.ndarray) -> np.ndarray:
     return np.asarray(segments, dtype=float).reshape(-1, 2, 2)
 
 
-def build_model(cfg: ModelFile, *, source: str = "<string>", nodes: Any = None):
+def build_model(
+    cfg: ModelFile,
+    *,
+    source: str = "<string>",
+    nodes: Any = None,
+    max_blocks: int | None = MAX_BLOCKS,
+):
     """The :class:`rockdem.Model` a validated file describes.
+
+    Parameters
+    ----------
+    max_blocks : int or None
+        Refuse a model of more blocks than this, before building it (a
+        generated slope by its estimated size); None: no limit.
 
     Raises
     ------
     ModelFileError
         Geometry problems found while building (overlapping or degenerate
-        blocks, loads that miss every block, a slope that makes no blocks),
-        mapped to the key path at fault.
+        blocks, loads that miss every block, a slope that makes no blocks or
+        too many, blocks that nothing holds), and anything the stabilisation
+        designs would be refused for, mapped to the key path at fault.
     """
     names: dict[str, Loc] = {}
     ids: dict[int, int] = {}  # block id -> position in `blocks`
@@ -124,18 +147,38 @@ def build_model(cfg: ModelFile, *, source: str = "<string>", nodes: Any = None):
         joints = _joints(cfg)
         name = cfg.name or Path(source).stem
         if cfg.blocks is not None:
+            _check_count(cfg, source, nodes, max_blocks)
             model = _explicit_model(cfg, joints, loads, settings, name, ids)
         else:
-            model = _slope_model(cfg, joints, loads, settings, name)
+            model = _slope_model(cfg, joints, loads, settings, name, max_blocks)
         _check_free(model, cfg, source, nodes)
         from ..solver import build_system
 
-        build_system(model)  # interfaces, springs, loads on blocks: every input check
+        try:
+            build_system(model)  # interfaces, springs, loads on blocks: every input check
+        except InputError:
+            check_held(model.blocks)  # a singular stiffness: say which blocks nothing holds
+            raise
     except ModelFileError:
         raise
     except InputError as exc:
         raise _from_engine(exc, cfg, ids, names, source, nodes) from None
+    _check_stabilisation(model, cfg, source, nodes)
     return model
+
+
+def _check_count(cfg: ModelFile, source: str, nodes: Any, max_blocks: int | None) -> None:
+    assert cfg.blocks is not None
+    n = len(cfg.blocks)
+    if max_blocks is not None and n > max_blocks:
+        raise ModelFileError(
+            source,
+            "blocks",
+            f"{n:,} blocks are more than the limit of {max_blocks:,} "
+            f"(about {memory_for(n) / 1e9:.1f} GB of memory)",
+            "raise the limit with `rockdem --max-blocks N ...` if the machine has the memory",
+            _line(nodes, ("blocks",)),
+        )
 
 
 def _check_free(model, cfg: ModelFile, source: str, nodes: Any) -> None:
@@ -148,6 +191,55 @@ def _check_free(model, cfg: ModelFile, source: str, nodes: Any) -> None:
             "check the profile, the joint sets and the removal regions",
             _line(nodes, loc),
         )
+
+
+def _check_stabilisation(model, cfg: ModelFile, source: str, nodes: Any) -> None:
+    """Try every design of `stabilisation` on the model's geometry (no analysis), so
+    that `check` refuses what `stabilise` would: unknown or fixed blocks, regions and
+    profiles that remove nothing or leave blocks floating, a support off the rock."""
+    from ..stabilisation import _edit
+
+    spec = cfg.stabilisation
+
+    def attempt(loc: Loc, action):
+        try:
+            return action()
+        except ModelFileError:
+            raise
+        except InputError as exc:
+            raise ModelFileError(
+                source, _keypath(loc), f"{exc.where}: {exc.problem}", exc.fix, _line(nodes, loc)
+            ) from None
+
+    def removal(r):
+        return {"blocks": list(r.blocks), "regions": list(r.regions), "profile": r.profile}
+
+    def held(m):
+        check_held(m.blocks)  # the analysis of the design would find it singular
+        return m
+
+    for i, trial in enumerate(spec.trials):
+        loc: Loc = ("stabilisation", "trials", i, "remove")
+        attempt(loc, lambda t=trial: held(_edit.apply_removal(model, **removal(t.remove))))
+    current = model
+    for i, stage in enumerate(spec.stages):
+        loc = ("stabilisation", "stages", i, "remove")
+        current = attempt(
+            loc, lambda s=stage, m=current: held(_edit.apply_removal(m, **removal(s.remove)))
+        )
+    if spec.berm is not None:
+        attempt(
+            ("stabilisation", "berm"),
+            lambda: held(_edit.cut_profile(model, [tuple(p) for p in spec.berm])),
+        )
+    if spec.support is not None and spec.support.at is not None:
+        from ..loads import block_loads
+        from ..model import PointLoad
+
+        at = spec.support.at
+        probe = PointLoad.anchor(at[0], at[1], 1.0, spec.support.angle, name="support")
+        loads = replace(model.loads, points=(probe,), lines=())
+        attempt(("stabilisation", "support", "at"), lambda: block_loads(model.blocks, loads))
 
 
 def _explicit_model(cfg: ModelFile, joints, loads, settings, name: str, positions: dict):
@@ -180,7 +272,7 @@ def _explicit_model(cfg: ModelFile, joints, loads, settings, name: str, position
     blocks = Blocks.from_polygons(polygons, fixed=fixed, unit_weight=gamma, ids=ids)
     lines = line_joint = None
     if cfg.joint_lines:
-        lines = _joint_lines(cfg, blocks.vertices)
+        lines = _joint_lines(cfg, blocks.vertices, blocks.tolerance)
         line_joint = [ln.joint for ln in cfg.joint_lines]
     model = Model(
         blocks,
@@ -208,7 +300,7 @@ def _profile(spec: ProfileSpec):
     return Profile.simple(spec.height, spec.face_angle, **kw)
 
 
-def _slope_model(cfg: ModelFile, joints, loads, settings, name: str):
+def _slope_model(cfg: ModelFile, joints, loads, settings, name: str, max_blocks: int | None):
     try:
         from .. import geometry
     except ImportError as exc:  # pragma: no cover - the geometry module is being written
@@ -242,6 +334,7 @@ def _slope_model(cfg: ModelFile, joints, loads, settings, name: str):
         "min_block_fraction": s.min_block_fraction,
         "slivers": s.slivers,
         "seed": s.seed,
+        "max_blocks": max_blocks,
     }
     if s.ground_thickness is not None:
         kw["ground_thickness"] = s.ground_thickness
@@ -277,8 +370,17 @@ def _from_engine(
     loc: Loc = ()
     m = _BLOCK.match(where)
     j = re.match(r"joint '(.+)' (\w+)$", where)
+    js = re.match(r"joint set '(.+?)'(?: (\w+))?$", where)
+    jl = re.match(r"joint_lines (\d+)$", where)
     if j and j.group(1) in cfg.joints:
         loc, label = ("joints", j.group(1), j.group(2)), ""
+    elif js and cfg.slope is not None and js.group(1) in cfg.slope.joint_sets:
+        loc = ("slope", "joint_sets", js.group(1)) + ((js.group(2),) if js.group(2) else ())
+        label = ""
+    elif jl:
+        loc, label = ("joint_lines", int(jl.group(1))), ""
+    elif cfg.blocks is not None and where.startswith("blocks ") and "," in where:
+        loc, label = ("blocks",), where
     elif cfg.blocks is not None and m and int(m.group(1)) in ids:
         loc = ("blocks", ids[int(m.group(1))])
         label = where

@@ -1,21 +1,44 @@
-"""Reading model files: YAML or TOML text to plain data, and the whole way to a model."""
+"""Reading model files: YAML or TOML text to plain data, and the whole way to a model.
+
+Reading is bounded, whatever the file holds:
+
+* only a regular file is read (not a folder, a named pipe or a device such as
+  ``/dev/zero``), of at most :data:`MAX_FILE_BYTES`;
+* UTF-8, with or without a byte-order mark;
+* YAML is read with the YAML 1.2 core schema (as JSON): ``1e6`` is a
+  number, ``2_5``, ``1:30`` and ``yes`` are text, ``010`` is ten;
+* a YAML document may nest at most :data:`MAX_DEPTH` levels and hold at most
+  :data:`MAX_NODES` values *with its aliases expanded*; an alias may not refer
+  to the node it is part of.  Anchors and aliases are allowed within these
+  bounds (to share joint properties, say), so an alias "bomb" is refused
+  after a single pass over the file, before anything is expanded.
+"""
 
 from __future__ import annotations
 
+import os
 import re
+import stat
 import tomllib
 from pathlib import Path
-from typing import Any
+from typing import Any, ClassVar
 
 import yaml
 
+from ..geometry.size import MAX_BLOCKS
 from .build import build_model
 from .errors import Loc, ModelFileError, _keypath, _kind
 from .spec import ModelFile
 from .validate import validate_document
 
-#: File suffixes read as TOML; everything else is read as YAML (JSON is YAML).
+#: File suffixes read as TOML; everything else is read as YAML (JSON is YAML too).
 TOML_SUFFIXES = (".toml",)
+#: Largest model file read, in bytes (a 100,000-block model is about 8 MB).
+MAX_FILE_BYTES = 32 * 2**20
+#: Deepest nesting of lists and mappings (a model needs 8).
+MAX_DEPTH = 32
+#: Most values (scalars, lists, mappings) in a document with its aliases expanded.
+MAX_NODES = 4_000_000
 
 
 def read_document(path: str | Path) -> tuple[dict, Any]:
@@ -30,29 +53,236 @@ def read_document(path: str | Path) -> tuple[dict, Any]:
     Raises
     ------
     ModelFileError
-        The file cannot be read or parsed, or is not a mapping of keys.
+        The file cannot be read or parsed, is not a regular file of at most
+        :data:`MAX_FILE_BYTES`, or is not a mapping of keys.
     """
     path = Path(path)
     source = str(path)
+    raw = read_bounded(path, source)
     try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise ModelFileError(source, "", "file not found", "check the path") from None
-    except IsADirectoryError:
-        raise ModelFileError(source, "", "is a directory", "give a model file") from None
+        text = raw.decode("utf-8-sig")
     except UnicodeDecodeError as exc:
         raise ModelFileError(
             source, "", f"is not UTF-8 text ({exc.reason})", "save it as UTF-8 text"
         ) from None
-    except OSError as exc:
-        raise ModelFileError(source, "", f"cannot be read ({exc.strerror})", "") from None
     fmt = "toml" if path.suffix.lower() in TOML_SUFFIXES else "yaml"
     return parse_document(text, fmt=fmt, source=source)
+
+
+def read_bounded(path: Path, source: str, limit: int = MAX_FILE_BYTES) -> bytes:
+    """The bytes of a regular file of at most ``limit`` bytes.
+
+    Opened without blocking (a named pipe is refused, not waited on), checked
+    to be a regular file, then read no further than ``limit``.
+    """
+    try:
+        fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0))
+    except FileNotFoundError:
+        raise ModelFileError(source, "", "file not found", "check the path") from None
+    except IsADirectoryError:
+        raise ModelFileError(source, "", "is a folder", "give a model file") from None
+    except OSError as exc:
+        raise ModelFileError(
+            source, "", f"cannot be read ({exc.strerror})", "check the path and permissions"
+        ) from None
+    try:
+        info = os.fstat(fd)
+    except OSError:
+        os.close(fd)
+        raise
+    if not stat.S_ISREG(info.st_mode) or info.st_size > limit:
+        os.close(fd)
+        if stat.S_ISDIR(info.st_mode):
+            raise ModelFileError(source, "", "is a folder", "give a model file")
+        if stat.S_ISREG(info.st_mode):
+            raise _too_large(source, limit)
+        raise ModelFileError(
+            source,
+            "",
+            "is not a regular file (a pipe, socket or device)",
+            "save the model to a file and give its path",
+        )
+    with os.fdopen(fd, "rb") as fh:
+        try:
+            raw = fh.read(limit + 1)
+        except OSError as exc:
+            raise ModelFileError(source, "", f"cannot be read ({exc.strerror})", "") from None
+    if len(raw) > limit:
+        raise _too_large(source, limit)
+    return raw
+
+
+def _too_large(source: str, limit: int) -> ModelFileError:
+    return ModelFileError(
+        source,
+        "",
+        f"is larger than {limit / 2**20:g} MiB, the limit of a model file",
+        "give the model file itself (not a result or a data file)",
+    )
+
+
+# ------------------------------------------------------------------ YAML
+_LoaderBase: Any = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
+_INT, _FLOAT, _BOOL = (f"tag:yaml.org,2002:{t}" for t in ("int", "float", "bool"))
+_DEC_INT = re.compile(r"^[-+]?[0-9]+$")
+_OCT_INT = re.compile(r"^0o[0-7]+$")
+_HEX_INT = re.compile(r"^0x[0-9a-fA-F]+$")
+_FLOAT_RE = re.compile(
+    r"^[-+]?(?:\.[0-9]+|[0-9]+(?:\.[0-9]*)?)(?:[eE][-+]?[0-9]+)?$"
+    r"|^[-+]?\.(?:inf|Inf|INF)$|^\.(?:nan|NaN|NAN)$"
+)
+
+
+class _Loader(_LoaderBase):
+    """Safe YAML with the YAML 1.2 core schema's numbers and booleans (as JSON has them)."""
+
+    yaml_implicit_resolvers: ClassVar[dict] = {
+        first: [(tag, rx) for tag, rx in rules if tag not in (_INT, _FLOAT, _BOOL)]
+        for first, rules in _LoaderBase.yaml_implicit_resolvers.items()
+    }
+
+
+_Loader.add_implicit_resolver(
+    _BOOL, re.compile(r"^(?:true|True|TRUE|false|False|FALSE)$"), list("tTfF")
+)
+_Loader.add_implicit_resolver(
+    _INT, re.compile(r"^[-+]?[0-9]+$|^0o[0-7]+$|^0x[0-9a-fA-F]+$"), list("-+0123456789")
+)
+_Loader.add_implicit_resolver(_FLOAT, _FLOAT_RE, list("-+0123456789."))
+
+
+def _construct_int(loader: yaml.SafeLoader, node: yaml.ScalarNode) -> int:
+    value = str(loader.construct_scalar(node))
+    if _DEC_INT.match(value):
+        return int(value, 10)
+    if _OCT_INT.match(value):
+        return int(value[2:], 8)
+    if _HEX_INT.match(value):
+        return int(value[2:], 16)
+    raise yaml.constructor.ConstructorError(
+        None, None, f"{value!r} is not a whole number", node.start_mark
+    )
+
+
+def _construct_float(loader: yaml.SafeLoader, node: yaml.ScalarNode) -> float:
+    value = str(loader.construct_scalar(node))
+    if _FLOAT_RE.match(value) or _DEC_INT.match(value):
+        if value.lstrip("+-").startswith("."):
+            low = value.lower()
+            if low.endswith("inf"):
+                return float("-inf") if low.startswith("-") else float("inf")
+            if low.endswith("nan"):
+                return float("nan")
+        return float(value)
+    raise yaml.constructor.ConstructorError(
+        None, None, f"{value!r} is not a number", node.start_mark
+    )
+
+
+def _construct_bool(loader: yaml.SafeLoader, node: yaml.ScalarNode) -> bool:
+    return str(loader.construct_scalar(node)).lower() == "true"
+
+
+_Loader.add_constructor(_INT, _construct_int)
+_Loader.add_constructor(_FLOAT, _construct_float)
+_Loader.add_constructor(_BOOL, _construct_bool)
+
+
+def _check_yaml_bounds(text: str, source: str) -> None:
+    """One pass over the YAML events: refuse deep nesting, self-referring aliases and
+    documents that would hold more than :data:`MAX_NODES` values once expanded."""
+    sizes: dict[str, int | None] = {}  # anchor -> expanded size (None while still open)
+    stack: list[list] = []  # open collections: [expanded size so far, anchor]
+
+    def fail(event: Any, problem: str, fix: str) -> None:
+        raise ModelFileError(source, "", problem, fix, event.start_mark.line + 1)
+
+    def add(event: Any, n: int) -> None:
+        if not stack:
+            return
+        stack[-1][0] += n
+        if stack[-1][0] > MAX_NODES:
+            fail(
+                event,
+                f"holds more than {MAX_NODES:,} values once its aliases are expanded",
+                "write the model without aliases that multiply (an alias bomb)",
+            )
+
+    loader = _Loader(text)
+    try:
+        while loader.check_event():
+            event = loader.get_event()
+            if isinstance(event, yaml.CollectionStartEvent):
+                if len(stack) >= MAX_DEPTH:
+                    fail(
+                        event,
+                        f"nests lists and mappings more than {MAX_DEPTH} deep",
+                        "a model nests at most a few levels: check the brackets",
+                    )
+                if event.anchor is not None:
+                    sizes[event.anchor] = None
+                stack.append([1, event.anchor])
+            elif isinstance(event, yaml.CollectionEndEvent):
+                size, anchor = stack.pop()
+                if anchor is not None:
+                    sizes[anchor] = size
+                add(event, size)
+            elif isinstance(event, yaml.ScalarEvent):
+                if event.anchor is not None:
+                    sizes[event.anchor] = 1
+                add(event, 1)
+            elif isinstance(event, yaml.AliasEvent):
+                if event.anchor not in sizes:
+                    continue  # undefined: the composer says so
+                size = sizes[event.anchor]
+                if size is None:
+                    fail(
+                        event,
+                        f"the alias *{event.anchor} refers to the node it is part of",
+                        "an alias must refer to a complete node defined before it",
+                    )
+                add(event, size)
+    finally:
+        loader.dispose()
+
+
+def _load_yaml(text: str, source: str) -> tuple[Any, Any]:
+    """(data, node tree) of a YAML document, within the bounds."""
+    _check_yaml_bounds(text, source)
+    loader = _Loader(text)
+    try:
+        nodes = loader.get_single_node()
+        if nodes is None:
+            return None, None
+        _check_duplicates(nodes, source)  # before construction merges `<<` keys in
+        return loader.construct_document(nodes), nodes
+    finally:
+        loader.dispose()
+
+
+def _check_depth(data: Any, source: str) -> None:
+    """Refuse data nested more than :data:`MAX_DEPTH` levels (iteratively: no recursion)."""
+    todo = [(data, 1)]
+    while todo:
+        item, depth = todo.pop()
+        if isinstance(item, dict | list):
+            if depth > MAX_DEPTH:
+                raise ModelFileError(
+                    source,
+                    "",
+                    f"nests lists and tables more than {MAX_DEPTH} deep",
+                    "a model nests at most a few levels: check the brackets",
+                )
+            values = item.values() if isinstance(item, dict) else item
+            todo.extend((v, depth + 1) for v in values)
 
 
 def parse_document(text: str, *, fmt: str = "yaml", source: str = "<string>") -> tuple[dict, Any]:
     """Parse the text of a model file (see :func:`read_document`)."""
     nodes = None
+    text = text.removeprefix("\ufeff")
+    if len(text) > MAX_FILE_BYTES:
+        raise _too_large(source, MAX_FILE_BYTES)
     if fmt == "toml":
         try:
             data = tomllib.loads(text)
@@ -64,10 +294,17 @@ def parse_document(text: str, *, fmt: str = "yaml", source: str = "<string>") ->
             raise ModelFileError(
                 source, "", f"not valid TOML: {msg}", "fix the syntax", line
             ) from None
+        except RecursionError:
+            raise ModelFileError(
+                source,
+                "",
+                f"nests arrays or tables more than {MAX_DEPTH} deep",
+                "a model nests at most a few levels: check the brackets",
+            ) from None
+        _check_depth(data, source)
     else:
         try:
-            nodes = yaml.compose(text, Loader=yaml.SafeLoader)
-            data = yaml.safe_load(text)
+            data, nodes = _load_yaml(text, source)
         except yaml.MarkedYAMLError as exc:
             mark = exc.problem_mark or exc.context_mark
             line = mark.line + 1 if mark is not None else None
@@ -84,7 +321,6 @@ def parse_document(text: str, *, fmt: str = "yaml", source: str = "<string>") ->
             ) from None
         except yaml.YAMLError as exc:
             raise ModelFileError(source, "", f"not valid YAML: {exc}", "fix the syntax") from None
-        _check_duplicates(nodes, source)
     if data is None:
         raise ModelFileError(
             source, "", "the file is empty", "write a model (see `rockdem example list`)"
@@ -100,41 +336,61 @@ def parse_document(text: str, *, fmt: str = "yaml", source: str = "<string>") ->
     return data, nodes
 
 
-def _check_duplicates(node: Any, source: str, path: Loc = ()) -> None:
-    """PyYAML keeps the last of repeated keys silently; a repeated key is a mistake."""
-    if isinstance(node, yaml.MappingNode):
-        seen: set[str] = set()
-        for k, v in node.value:
-            key = k.value if isinstance(k, yaml.ScalarNode) else str(k)
-            if key in seen:
-                raise ModelFileError(
-                    source,
-                    _keypath((*path, key)),
-                    "the key is repeated",
-                    "keep only one of them",
-                    k.start_mark.line + 1,
-                )
-            seen.add(key)
-            _check_duplicates(v, source, (*path, key))
-    elif isinstance(node, yaml.SequenceNode):
-        for i, item in enumerate(node.value):
-            _check_duplicates(item, source, (*path, i))
+def _check_duplicates(root: Any, source: str) -> None:
+    """PyYAML keeps the last of repeated keys silently; a repeated key is a mistake.
+
+    Every node is visited once, however many aliases refer to it.
+    """
+    seen_nodes: set[int] = set()
+    todo: list[tuple[Any, Loc]] = [(root, ())]
+    while todo:
+        node, path = todo.pop()
+        if id(node) in seen_nodes:
+            continue
+        seen_nodes.add(id(node))
+        if isinstance(node, yaml.MappingNode):
+            seen: set[str] = set()
+            children = []
+            for k, v in node.value:
+                key = k.value if isinstance(k, yaml.ScalarNode) else str(k)
+                if key in seen:
+                    raise ModelFileError(
+                        source,
+                        _keypath((*path, key)),
+                        "the key is repeated",
+                        "keep only one of them",
+                        k.start_mark.line + 1,
+                    )
+                seen.add(key)
+                children.append((v, (*path, key)))
+            todo.extend(reversed(children))  # in the order of the file
+        elif isinstance(node, yaml.SequenceNode):
+            todo.extend(reversed([(item, (*path, i)) for i, item in enumerate(node.value)]))
 
 
-def parse_model(text: str, *, fmt: str = "yaml", source: str = "<string>") -> tuple[Any, ModelFile]:
+def parse_model(
+    text: str,
+    *,
+    fmt: str = "yaml",
+    source: str = "<string>",
+    max_blocks: int | None = MAX_BLOCKS,
+) -> tuple[Any, ModelFile]:
     """Model and validated file from the text of a model file."""
     data, nodes = parse_document(text, fmt=fmt, source=source)
     cfg = validate_document(data, source=source, nodes=nodes)
-    return build_model(cfg, source=source, nodes=nodes), cfg
+    return build_model(cfg, source=source, nodes=nodes, max_blocks=max_blocks), cfg
 
 
-def load_model(path: str | Path) -> tuple[Any, ModelFile]:
+def load_model(path: str | Path, *, max_blocks: int | None = MAX_BLOCKS) -> tuple[Any, ModelFile]:
     """Read, validate and build a model file.
 
     Parameters
     ----------
     path : str or Path
         A ``.yaml``/``.yml``/``.json`` or ``.toml`` model file.
+    max_blocks : int or None
+        Refuse a model of more blocks than this before building it (see
+        :mod:`rockdem.geometry.size`); None: no limit.
 
     Returns
     -------
@@ -153,4 +409,4 @@ def load_model(path: str | Path) -> tuple[Any, ModelFile]:
     cfg = validate_document(data, source=str(path), nodes=nodes)
     if cfg.name is None:
         cfg = cfg.model_copy(update={"name": path.stem})
-    return build_model(cfg, source=str(path), nodes=nodes), cfg
+    return build_model(cfg, source=str(path), nodes=nodes, max_blocks=max_blocks), cfg
