@@ -15,8 +15,29 @@ from rich.markup import escape
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
 from .. import __version__
+from ..geometry.size import MAX_BLOCKS
 
 EXIT_OK, EXIT_FAILED, EXIT_INPUT = 0, 1, 2
+
+#: Options of the root command that every subcommand reads (set on each invocation).
+_ROOT: dict[str, Any] = {"max_blocks": MAX_BLOCKS}
+
+#: The files each command writes into its ``--out`` folder (glob patterns allowed).
+_WRITES: dict[str, tuple[str, ...]] = {
+    "run": ("blocks.csv", "interfaces.csv", "springs.csv", "result.json"),
+    "fos": ("blocks.csv", "interfaces.csv", "springs.csv", "result.json"),
+    "report": ("report.html",),
+    "stabilise": (
+        "stabilisation.json",
+        "measures.csv",
+        "removal.csv",
+        "designs.csv",
+        "stages.csv",
+        "stage_failures.csv",
+        "trial-*.png",
+        "stage-*.png",
+    ),
+}
 
 app = typer.Typer(
     name="rockdem",
@@ -95,8 +116,20 @@ def _root(
             "--version", callback=_version, is_eager=True, help="Print the version and exit."
         ),
     ] = None,
+    max_blocks: Annotated[
+        int,
+        typer.Option(
+            "--max-blocks",
+            min=1,
+            envvar="ROCKDEM_MAX_BLOCKS",
+            help="Refuse models of more blocks than this (a generated slope by its "
+            "estimated size, before it is built). Each 100,000 blocks need about 2.5 GB.",
+            metavar="N",
+        ),
+    ] = MAX_BLOCKS,
 ) -> None:
     """Stability of jointed rock slopes by the discrete element method."""
+    _ROOT["max_blocks"] = max_blocks
 
 
 # ------------------------------------------------------------------ errors
@@ -144,11 +177,58 @@ def _model_path(model: Path | None, example: str | None) -> Path:
 
 
 def _load(model: Path | None, example: str | None):
+    """Check the destination of the command (before any work), then read the model."""
     from ..config import load_model
 
     path = _model_path(model, example)
-    m, cfg = load_model(path)
+    _check_destination(path)
+    m, cfg = load_model(path, max_blocks=_ROOT["max_blocks"])
     return path, m, cfg
+
+
+def _current_context() -> Any:
+    """The context of the running command (None outside one).
+
+    Typer vendors click from 0.2x on (``typer._click``); older typers use click.
+    """
+    import importlib
+
+    for name in ("typer._click.globals", "click.globals"):
+        try:
+            module = importlib.import_module(name)
+        except ImportError:
+            continue
+        ctx = module.get_current_context(silent=True)
+        if ctx is not None:
+            return ctx
+    return None
+
+
+def _check_destination(model: Path) -> None:
+    """Refuse an ``--out`` the results could not be written to, or that would write
+    over the model file, before the model is read or anything computed.
+
+    Reads the ``--out`` and ``--overwrite`` options of the running command, so
+    every command that writes is covered by the one call in :func:`_load`.
+    """
+    from .files import _check_out_file, _check_out_folder
+
+    ctx = _current_context()
+    if ctx is None:
+        return
+    params, command = ctx.params, ctx.info_name or ""
+    overwrite = bool(params.get("overwrite", False))
+    if params.get("out_dir") is not None:
+        _check_out_folder(
+            Path(params["out_dir"]),
+            _WRITES.get(command, ()),
+            overwrite=overwrite,
+            inputs=[model],
+            temp_beside=command in ("run", "fos"),
+            refuse_existing=command == "stabilise",
+        )
+    if params.get("out_file") is not None:
+        _check_out_file(Path(params["out_file"]), inputs=[model])
 
 
 @contextmanager

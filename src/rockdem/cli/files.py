@@ -1,5 +1,6 @@
 """Writing one output file all or nothing: to a temporary file beside it, then moved
-into place (never over an existing file without ``--overwrite``)."""
+into place (never over an existing file without ``--overwrite``); and checking a
+destination before anything is computed (never over the model file)."""
 
 from __future__ import annotations
 
@@ -46,3 +47,132 @@ def _save_file(target: Path, overwrite: bool, write: Callable[[Path], Any]) -> P
     finally:
         tmp.unlink(missing_ok=True)
     return target
+
+
+# ------------------------------------------------------ before computing
+def _nearest_existing(path: Path) -> Path:
+    """``path`` or its closest ancestor that exists (links are not followed)."""
+    path = Path(os.path.abspath(path))
+    while not os.path.lexists(path) and path != path.parent:
+        path = path.parent
+    return path
+
+
+def _check_can_create(path: Path, option: str) -> None:
+    """``path`` (a file or folder to be made) can be created: its closest existing
+    ancestor is a folder we may write into."""
+    from ..errors import InputError
+
+    base = _nearest_existing(path.parent)
+    if not base.is_dir():
+        raise InputError(
+            f"{option} {path}",
+            f"cannot be created: {base} is a file, not a folder",
+            "give a path in a folder",
+        )
+    if not os.access(base, os.W_OK | os.X_OK):
+        raise InputError(
+            f"{option} {path}",
+            f"cannot be created: the folder {base} is not writable",
+            "give a folder you may write into",
+        )
+
+
+def _same_file(a: Path, b: Path) -> bool:
+    try:
+        return os.path.samefile(a, b)
+    except OSError:
+        return False
+
+
+def _check_out_folder(
+    folder: Path,
+    names: tuple[str, ...],
+    *,
+    overwrite: bool,
+    inputs: list[Path],
+    option: str = "--out",
+    temp_beside: bool = False,
+    refuse_existing: bool = False,
+) -> None:
+    """Everything about a result folder that can be known before the computation.
+
+    ``names`` are the files the command writes into ``folder`` (glob patterns
+    allowed).  Refused: a folder that is a file or under one, one we may not
+    write into (or, with ``temp_beside``, whose parent we may not write into:
+    the results are first written to a temporary folder there), a result
+    name taken by a folder (the set could not be written all or nothing), a
+    result name that is one of ``inputs`` (never write over the model), and,
+    with ``refuse_existing`` and without ``overwrite``, results that exist.
+    """
+    from ..errors import InputError
+
+    where = f"{option} {folder}"
+    if os.path.lexists(folder) and not folder.is_dir():
+        raise InputError(where, "is a file, not a folder", "give a folder")
+    if not folder.exists():
+        _check_can_create(folder, option)
+        return
+    if not os.access(folder, os.W_OK | os.X_OK):
+        raise InputError(where, "is not writable", "give a folder you may write into")
+    parent = folder.resolve().parent
+    if temp_beside and not os.access(parent, os.W_OK | os.X_OK):
+        raise InputError(
+            where,
+            f"cannot be written: the results are first written to a temporary folder in "
+            f"{parent}, which is not writable",
+            "give a folder whose parent you may write into",
+        )
+    targets: list[Path] = []
+    for name in names:
+        targets += sorted(folder.glob(name)) if "*" in name else [folder / name]
+    for path in targets:
+        for source in inputs:
+            if _same_file(path, source):
+                raise InputError(
+                    where,
+                    f"would write {path.name} over the model file {source}",
+                    "write the results into another folder",
+                )
+        if path.is_dir():
+            raise InputError(
+                where,
+                f"{path.name} is a folder, so the results could not be written all or nothing",
+                "remove or rename it, or write the results into another folder",
+            )
+        if refuse_existing and not overwrite and os.path.lexists(path):
+            raise InputError(
+                where,
+                f"already holds {path.name}",
+                "use --overwrite to replace the results, or another folder",
+            )
+
+
+def _check_out_file(target: Path, *, inputs: list[Path], option: str = "--out") -> None:
+    """A single output file: never one of ``inputs``; its folder can be made and written."""
+    from ..errors import InputError
+
+    for source in inputs:
+        if _same_file(target, source):
+            raise InputError(
+                f"{option} {target}",
+                f"is the model file {source}",
+                "give another file name (the model is never overwritten)",
+            )
+    if target.is_dir():
+        raise InputError(f"{option} {target}", "is a folder", "give a file name")
+    if target.parent.exists():
+        if not target.parent.is_dir():
+            raise InputError(
+                f"{option} {target}",
+                f"cannot be created: {target.parent} is a file, not a folder",
+                "give a path in a folder",
+            )
+        if not os.access(target.parent, os.W_OK | os.X_OK):
+            raise InputError(
+                f"{option} {target}",
+                f"cannot be written: the folder {target.parent} is not writable",
+                "give a folder you may write into",
+            )
+    else:
+        _check_can_create(target.parent, option)

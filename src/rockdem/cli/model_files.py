@@ -17,24 +17,37 @@ def schema(
     out_file: Annotated[
         Path | None, typer.Option("--out", "-o", help="Write to this file instead of stdout.")
     ] = None,
+    overwrite: Annotated[
+        bool, typer.Option("--overwrite", help="Replace the file if it exists.")
+    ] = False,
     debug: DebugOpt = False,
 ) -> None:
-    """Print the JSON Schema of model files (for editor completion)."""
+    """Print the JSON Schema of model files (for editor completion).
+
+    With --out the file is written whole or not at all, and an existing file
+    (a model, say) is replaced only with --overwrite.
+    """
     with _guard(debug):
         from ..config import json_schema
         from ..errors import InputError
+        from .files import _check_new_file, _save_file
 
         text = json.dumps(json_schema(), indent=2) + "\n"
         if out_file is None:
             typer.echo(text, nl=False)
             return
+        _check_new_file(out_file, "--out", overwrite)
+        if not out_file.parent.is_dir():
+            raise InputError(
+                f"--out {out_file}", "is not in an existing folder", "give a file in a folder"
+            )
         try:
-            out_file.write_text(text, encoding="utf-8")
+            _save_file(out_file, overwrite, lambda tmp: tmp.write_text(text, encoding="utf-8"))
         except OSError as exc:
             raise InputError(
                 f"--out {out_file}",
                 f"cannot be written ({exc.strerror})",
-                "give a file in an existing folder",
+                "give a file in a folder you may write into",
             ) from None
 
 
@@ -53,10 +66,24 @@ def example_copy(
     overwrite: OverwriteOpt = False,
     debug: DebugOpt = False,
 ) -> None:
-    """Copy a bundled example into a folder, to edit and run."""
-    with _guard(debug):
-        from ..examples import copy_example
+    """Copy a bundled example into a folder, to edit and run.
 
+    The copy is never written through a link (a link in the folder could
+    point anywhere).
+    """
+    with _guard(debug):
+        from ..errors import InputError
+        from ..examples import copy_example, example_path
+
+        target = folder / example_path(name).name
+        if target.is_symlink():
+            raise InputError(
+                str(target),
+                "is a link; the example is not written through it",
+                "remove the link, or copy into another folder",
+            )
+        if target.is_dir():
+            raise InputError(str(target), "is a folder", "remove it, or copy into another folder")
         target = copy_example(name, folder, overwrite=overwrite)
         out.print(f"copied {name} to {escape(str(target))}")
         out.print(f"next: rockdem check {escape(str(target))}")
