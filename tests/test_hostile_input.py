@@ -1,0 +1,579 @@
+"""Hostile input: whatever a model file holds, rockdem answers in bounded time and
+memory with one line and exit 2 (or a correct result), and writes nothing it was
+not asked to write.
+
+Cases whose failure would be a hang or a memory blow-up (pipes, devices, large
+files, aliases, nesting, models too large to build, writing results) run
+``python -m rockdem`` in a subprocess with a time limit and an address-space
+limit; cases refused by validation run in-process (typer's runner) with a time
+limit asserted.  Files are generated here in ``tmp_path``.  Classes: files
+that are not regular or too large, encodings, YAML aliases and nesting, number
+spellings, values out of their range, iteration counts, models too large to
+build, what ``check`` must refuse, blocks that nothing holds, and
+destinations (never over the model, never half a result set).
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import rockdem as rd
+from rockdem.config import ModelFileError, parse_model
+from rockdem.config.parse import MAX_DEPTH, MAX_FILE_BYTES, MAX_NODES
+from rockdem.geometry import JointSet, Profile, estimate_size, generate_slope, section_polygon
+
+TIME_LIMIT = 60  # seconds: a hang fails the test (each case takes 1-3 s)
+MEMORY_LIMIT = 1536 * 2**20  # bytes of address space for the child
+
+BOX = """units: kN, m, kPa
+materials: {rock: {unit_weight: 25}}
+joints:
+  bedding: {normal_stiffness: 1.0e+6, friction_angle: 30}
+blocks:
+  - {fixed: true, vertices: [[-5, -1], [5, -1], [5, 0], [-5, 0]]}
+  - {material: rock, vertices: [[0, 0], [2, 0], [2, 1], [0, 1]]}
+  - {material: rock, vertices: [[0, 1], [2, 1], [2, 2], [0, 2]]}
+"""
+
+BOX_TOML = """units = "kN, m, kPa"
+[materials.rock]
+unit_weight = 25
+[joints.bedding]
+normal_stiffness = 1e6
+friction_angle = 30
+[[blocks]]
+fixed = true
+vertices = [[-5, -1], [5, -1], [5, 0], [-5, 0]]
+[[blocks]]
+material = "rock"
+vertices = [[0, 0], [2, 0], [2, 1], [0, 1]]
+"""
+
+SLOPE = """units: kN, m, kPa
+materials: {rock: {unit_weight: 25}}
+joints:
+  bedding: {normal_stiffness: 1.0e+6, friction_angle: 35}
+  cross: {normal_stiffness: 1.0e+6, friction_angle: 35}
+  base: {normal_stiffness: 1.0e+6, friction_angle: 45}
+ground_joint: base
+slope:
+  profile: {height: 6, face_angle: 60}
+  depth: 3
+  joint_sets:
+    bedding: {dip: 0, spacing: 2, origin: [0, 1]}
+    cross: {dip: 90, spacing: 3, origin: [0.5, 0]}
+"""
+
+
+def _limit_memory() -> None:  # pragma: no cover - runs in the child
+    try:
+        import resource
+
+        resource.setrlimit(resource.RLIMIT_AS, (MEMORY_LIMIT, MEMORY_LIMIT))
+    except (ImportError, ValueError, OSError):
+        pass
+
+
+def rockdem(*args, cwd: Path, timeout: float = TIME_LIMIT) -> subprocess.CompletedProcess:
+    """Run the command line in a child with a time and a memory limit."""
+    env = {**os.environ, "COLUMNS": "400", "ROCKDEM_MAX_BLOCKS": ""}
+    env.pop("ROCKDEM_MAX_BLOCKS")
+    start = time.monotonic()
+    r = subprocess.run(
+        [sys.executable, "-m", "rockdem", *map(str, args)],
+        cwd=cwd,
+        capture_output=True,
+        text=True,
+        timeout=timeout,
+        env=env,
+        preexec_fn=_limit_memory if sys.platform.startswith("linux") else None,
+    )
+    r.elapsed = time.monotonic() - start
+    return r
+
+
+class _Run:
+    """What a command returned (in-process), shaped like a CompletedProcess."""
+
+    def __init__(self, returncode: int, stdout: str, stderr: str, elapsed: float) -> None:
+        self.returncode, self.stdout, self.stderr, self.elapsed = (
+            returncode,
+            stdout,
+            stderr,
+            elapsed,
+        )
+
+
+def inproc(*args, cwd: Path, limit: float = 10.0) -> _Run:
+    """Run the command line in this process (fast) and assert it took under ``limit`` s."""
+    from typer.testing import CliRunner
+
+    from rockdem.cli import app
+
+    old = Path.cwd()
+    os.chdir(cwd)
+    try:
+        start = time.monotonic()
+        r = CliRunner().invoke(app, [str(a) for a in args])
+        elapsed = time.monotonic() - start
+    finally:
+        os.chdir(old)
+    assert elapsed < limit, f"took {elapsed:.1f} s"
+    return _Run(r.exit_code, r.stdout, r.stderr, elapsed)
+
+
+def refused(r, *fragments: str) -> str:
+    """Exit 2 with one line on stderr holding every fragment; the line."""
+    assert r.returncode == 2, (r.returncode, r.stdout, r.stderr)
+    lines = r.stderr.strip().splitlines()
+    assert len(lines) == 1, r.stderr
+    assert "Traceback" not in r.stderr and lines[0].startswith("error: ")
+    for fragment in fragments:
+        assert fragment in lines[0], lines[0]
+    return lines[0]
+
+
+def check(tmp_path: Path, text: str, name: str = "m.yaml", *extra, child: bool = False):
+    """``rockdem check`` of ``text`` (in a subprocess with ``child``)."""
+    path = tmp_path / name
+    path.write_text(text, encoding="utf-8")
+    run = rockdem if child else inproc
+    return run(*extra, "check", path.name, cwd=tmp_path)
+
+
+# ------------------------------------------------------------ what is read
+@pytest.mark.skipif(not hasattr(os, "mkfifo"), reason="no named pipes here")
+def test_a_named_pipe_is_refused_not_waited_on(tmp_path):
+    os.mkfifo(tmp_path / "pipe.yaml")
+    refused(rockdem("check", "pipe.yaml", cwd=tmp_path, timeout=20), "not a regular file")
+
+
+@pytest.mark.skipif(not os.path.exists("/dev/zero"), reason="no /dev/zero")
+def test_a_device_is_refused_not_read(tmp_path):
+    refused(rockdem("check", "/dev/zero", cwd=tmp_path, timeout=20), "not a regular file")
+
+
+def test_a_folder_is_refused(tmp_path):
+    (tmp_path / "model.yaml").mkdir()
+    refused(rockdem("check", "model.yaml", cwd=tmp_path), "model.yaml: is a folder")
+
+
+def test_a_file_over_the_size_limit_is_refused_unread(tmp_path):
+    with open(tmp_path / "big.yaml", "wb") as fh:
+        fh.truncate(MAX_FILE_BYTES + 1)  # sparse: costs no disk
+    refused(rockdem("check", "big.yaml", cwd=tmp_path), "larger than 32 MiB")
+
+
+def test_text_that_is_not_utf8_is_refused(tmp_path):
+    (tmp_path / "m.yaml").write_bytes(BOX.replace("kPa", "kPa \xe9").encode("latin-1"))
+    refused(rockdem("check", "m.yaml", cwd=tmp_path), "is not UTF-8 text")
+
+
+@pytest.mark.parametrize("name,text", [("m.toml", BOX_TOML), ("m.yaml", BOX)])
+def test_a_utf8_byte_order_mark_is_accepted(tmp_path, name, text):
+    (tmp_path / name).write_bytes(b"\xef\xbb\xbf" + text.encode())
+    r = rockdem("check", name, cwd=tmp_path)
+    assert r.returncode == 0, r.stderr
+    assert "valid" in r.stdout
+
+
+# ----------------------------------------------------------------- YAML
+def test_an_alias_bomb_ends_at_once(tmp_path):
+    lines = ["a0: &a0 [x, x, x, x, x, x, x, x, x]"]
+    lines += [f"a{i}: &a{i} [{', '.join([f'*a{i - 1}'] * 9)}]" for i in range(1, 10)]
+    r = check(tmp_path, BOX + "\n".join(lines) + "\n", child=True)
+    refused(r, f"more than {MAX_NODES:,} values once its aliases are expanded")
+    assert r.elapsed < 15
+
+
+def test_an_alias_inside_its_own_anchor_is_refused(tmp_path):
+    r = check(tmp_path, BOX + "description: &d [1, *d]\n", child=True)
+    refused(r, "alias *d refers to the node")
+
+
+def test_aliases_within_the_bounds_share_properties(tmp_path):
+    text = BOX.replace(
+        "  bedding: {normal_stiffness: 1.0e+6, friction_angle: 30}",
+        "  bedding: &j {normal_stiffness: 1.0e+6, friction_angle: 30}\n  other: *j",
+    )
+    r = check(tmp_path, text)
+    assert r.returncode == 0, r.stderr
+
+
+@pytest.mark.parametrize(
+    "name,text",
+    [
+        ("m.yaml", BOX + "description: " + "[" * 20000 + "]" * 20000 + "\n"),
+        ("m.json", '{"joints": ' + "[" * 20000 + "]" * 20000 + "}\n"),
+        ("m.toml", BOX_TOML.replace('units = "kN, m, kPa"', "x = " + "[" * 20000 + "]" * 20000)),
+        ("n.toml", BOX_TOML.replace('units = "kN, m, kPa"', "x = " + "[" * 100 + "]" * 100)),
+    ],
+)
+def test_deep_nesting_is_refused_without_recursion(tmp_path, name, text):
+    refused(check(tmp_path, text, name, child=True), f"more than {MAX_DEPTH} deep")
+
+
+# -------------------------------------------------------------- numbers
+@pytest.mark.parametrize(
+    "value,fragment",
+    [
+        ('"2_5"', "expected a number, got '2_5'"),
+        ("2_5", "expected a number, got '2_5'"),  # YAML 1.2: text, not 25
+        ("1:30", "expected a number, got '1:30'"),  # YAML 1.1 sexagesimal: text
+        ('"0x1e"', "expected a number, got '0x1e'"),
+        ('"infinity"', "expected a number, got 'infinity'"),
+        (".inf", "is not a finite number"),
+    ],
+)
+def test_numbers_are_read_as_the_format_writes_them(tmp_path, value, fragment):
+    text = BOX.replace("friction_angle: 30", f"friction_angle: {value}")
+    refused(check(tmp_path, text), "joints.bedding.friction_angle", fragment)
+
+
+def test_toml_underscores_are_toml_numbers_but_quoted_ones_are_not(tmp_path):
+    ok = check(tmp_path, BOX_TOML.replace("friction_angle = 30", "friction_angle = 2_5"), "a.toml")
+    assert ok.returncode == 0, ok.stderr
+    r = check(tmp_path, BOX_TOML.replace("friction_angle = 30", 'friction_angle = "2_5"'), "b.toml")
+    refused(r, "joints.bedding.friction_angle", "expected a number")
+
+
+def test_json_exponents_are_numbers(tmp_path):
+    r = check(tmp_path, BOX.replace("normal_stiffness: 1.0e+6", "normal_stiffness: 1e6"))
+    assert r.returncode == 0, r.stderr
+
+
+@pytest.mark.parametrize(
+    "old,new,key,fragment",
+    [
+        (
+            "{material: rock, vertices: [[0, 0]",
+            "{id: 99999999999999999999999, material: rock, vertices: [[0, 0]",
+            "blocks[1].id",
+            "<= 9223372036854775807",
+        ),
+        ("unit_weight: 25", "unit_weight: 1.0e+300", "materials.rock.unit_weight", "<= 1e+09"),
+        (
+            "units: kN, m, kPa",
+            "units: x\nanalysis: {tolerance: 1.0e-300}",
+            "analysis.tolerance",
+            ">= 1e-12 and < 0.01",
+        ),
+        (
+            "units: kN, m, kPa",
+            "units: x\nanalysis: {load_steps: 1000000000}",
+            "analysis.load_steps",
+            "<= 1000",
+        ),
+        (
+            "units: kN, m, kPa",
+            "units: x\nanalysis: {load_steps: 9223372036854775807}",
+            "analysis.load_steps",
+            "<= 1000",
+        ),
+        (
+            "units: kN, m, kPa",
+            "units: x\nanalysis: {max_iterations: 100000000}",
+            "analysis.max_iterations",
+            "<= 1000",
+        ),
+        (
+            "units: kN, m, kPa",
+            "units: x\nanalysis: {strength_reduction: {width: 1.0e-300}}",
+            "analysis.strength_reduction.width",
+            ">= 1e-06",
+        ),
+        (
+            "units: kN, m, kPa",
+            "units: x\nstabilisation: {max_rounds: 100000000}",
+            "stabilisation.max_rounds",
+            "<= 50",
+        ),
+        ("[[0, 0], [2, 0]", "[[1.0e+300, 0], [2, 0]", "blocks[1].vertices[0][0]", "<= 1e+09"),
+        (
+            "normal_stiffness: 1.0e+6",
+            "normal_stiffness: 1.0e-300",
+            "joints.bedding.normal_stiffness",
+            ">= 1e-06 and <= 1e+15",
+        ),
+    ],
+)
+def test_values_out_of_their_range_name_the_key_and_the_range(tmp_path, old, new, key, fragment):
+    assert old in BOX
+    refused(check(tmp_path, BOX.replace(old, new, 1)), key, "out of range", fragment)
+
+
+@pytest.mark.parametrize(
+    "settings",
+    ["{grow: 1.000000001}", "{width: 1.0e-6, grow: 1.01}", "{largest: 1.0e+6, grow: 1.05}"],
+)
+def test_strength_reduction_settings_that_allow_endless_trials(tmp_path, settings):
+    text = BOX.replace("units: kN, m, kPa", f"analysis: {{strength_reduction: {settings}}}")
+    refused(check(tmp_path, text), "analysis.strength_reduction", "trials, more than 100")
+
+
+def test_a_negative_seed_is_an_input_error(tmp_path):
+    r = check(tmp_path, SLOPE.replace("  depth: 3", "  depth: 3\n  seed: -1"))
+    refused(r, "slope.seed", "out of range", ">= 0")
+
+
+def test_a_spacing_of_1e_minus_300_names_the_key_and_range(tmp_path):
+    r = check(tmp_path, SLOPE.replace("spacing: 2,", "spacing: 1.0e-300,"))
+    refused(r, "slope.joint_sets.bedding.spacing", ">= 1e-06 and <= 1e+09")
+
+
+# ------------------------------------------------------ size before build
+@pytest.mark.parametrize(
+    "old,new,key",
+    [
+        ("spacing: 2,", "spacing: 1.0e-4,", "slope.joint_sets.bedding"),
+        ("height: 6, face_angle: 60", "height: 1.0e+6, face_angle: 60", "slope.joint_sets"),
+        ("height: 6, face_angle: 60", "height: 6, face_angle: 0.001", "slope.joint_sets"),
+        (
+            "{dip: 0, spacing: 2, origin: [0, 1]}",
+            "{dip: 0, spacing: 2, origin: [0, 1], trace_length: 1.0e-5, gap: 1.0e-5}",
+            "slope.joint_sets.bedding.trace_length",
+        ),
+    ],
+)
+def test_a_slope_too_large_to_build_is_refused_with_its_estimate(tmp_path, old, new, key):
+    text = SLOPE.replace(old, new)
+    if "gap" in new:
+        text = text.replace("  depth: 3", "  depth: 3\n  bridge_joint: base")
+    r = check(tmp_path, text, child=True)
+    line = refused(
+        r, key, "would cut the section", "more than the limit of 100,000 blocks", "--max-blocks"
+    )
+    assert "about" in line and "of memory" in line
+    assert r.elapsed < 20
+
+
+def test_the_block_limit_is_a_flag(tmp_path):
+    r = check(tmp_path, SLOPE, "m.yaml", "--max-blocks", "3")
+    refused(r, "slope.joint_sets", "more than the limit of 3 blocks")
+    r = check(tmp_path, BOX, "b.yaml", "--max-blocks", "2")
+    refused(r, "blocks", "3 blocks are more than the limit of 2")
+    assert check(tmp_path, SLOPE, "m.yaml", "--max-blocks", "1000").returncode == 0
+
+
+@pytest.mark.parametrize(
+    "sets",
+    [
+        [("a", 25, 1.5, None, 0.0), ("b", 115, 1.0, None, 0.0)],
+        [("a", 20, 2.0, 3.0, 1.0), ("b", 100, 1.5, None, 0.0)],
+        [("a", 0, 1.0, None, 0.0), ("b", 90, 2.0, None, 0.0), ("c", 45, 3.0, None, 0.0)],
+    ],
+)
+def test_the_size_estimate_is_close_to_the_built_slope(sets):
+    j = rd.Joint(1e5, 30)
+    prof = Profile.simple(20, 70, crest_length=20, toe_length=10)
+    js = [JointSet(n, d, s, j, trace_length=t, gap=g, origin=(0.1, 0.2)) for n, d, s, t, g in sets]
+    est = estimate_size(section_polygon(prof, 8), js)
+    geom = generate_slope(prof, js, depth=8, bridge_joint=j, min_block_fraction=0)
+    free = int((~geom.blocks.fixed).sum())
+    faces = geom.interfaces().n_interfaces
+    assert est.blocks == pytest.approx(free, rel=0.25)
+    assert est.interfaces == pytest.approx(faces, rel=0.3)
+
+
+def test_generate_slope_refuses_before_cutting():
+    j = rd.Joint(1e5, 30)
+    start = time.monotonic()
+    with pytest.raises(rd.InputError, match=r"joint set 'a'.*more than the limit of 100,000"):
+        generate_slope(Profile.simple(10, 60), [JointSet("a", 30, 1e-5, j)], depth=5)
+    assert time.monotonic() - start < 2
+
+
+# --------------------------------------------- check refuses what the rest would
+STAB = (
+    BOX
+    + """stabilisation:
+  trials:
+    - name: design
+      remove: {blocks: [42]}
+"""
+)
+
+
+def test_check_refuses_a_trial_naming_an_unknown_block(tmp_path):
+    refused(
+        check(tmp_path, STAB), "stabilisation.trials[0].remove", "block 42", "no block has this id"
+    )
+
+
+@pytest.mark.parametrize(
+    "section,key,fragment",
+    [
+        (
+            "  trials:\n    - {name: nothing, remove: {}}",
+            "stabilisation.trials[0].remove",
+            "removes nothing",
+        ),
+        (
+            "  stages:\n    - {name: s, remove: {profile: [[0, 0], [0, 0]]}}",
+            "stabilisation.stages[0].remove",
+            "profile",
+        ),
+        (
+            "  stages:\n    - {name: s, remove: {blocks: [0]}}",
+            "stabilisation.stages[0].remove",
+            "fixed ground",
+        ),
+        (
+            "  stages:\n    - {name: s, remove: {blocks: [1]}}",
+            "stabilisation.stages[0].remove",
+            "block 2",
+        ),
+        ("  berm: [[-10, 3], [10, 3]]", "stabilisation.berm", "does not overlap"),
+        ("  berm: [[5, 3], [0, 3]]", "stabilisation.berm", "x decreases"),
+        ("  support: {at: [50, 50]}", "stabilisation.support.at", ""),
+    ],
+)
+def test_check_refuses_stabilisation_designs_that_stabilise_would(tmp_path, section, key, fragment):
+    refused(check(tmp_path, BOX + "stabilisation:\n" + section + "\n"), key, fragment)
+
+
+def test_check_refuses_a_zero_length_joint_line(tmp_path):
+    text = BOX + "joint_lines:\n  - {joint: bedding, start: [0, 1], end: [0, 1]}\n"
+    refused(check(tmp_path, text), "joint_lines[0]", "zero length")
+
+
+def test_a_model_without_a_fixed_block_says_what_nothing_holds(tmp_path):
+    line = refused(
+        check(tmp_path, BOX.replace("fixed: true", "material: rock")),
+        "blocks 0, 1, 2 are held by nothing: no block is fixed",
+        "fixed: true",
+    )
+    assert "singular" not in line and "spring points" not in line
+
+
+def test_a_group_that_reaches_no_fixed_block_is_named(tmp_path):
+    text = BOX + (
+        "  - {material: rock, vertices: [[10, 0], [12, 0], [12, 1], [10, 1]]}\n"
+        "  - {material: rock, vertices: [[10, 1], [12, 1], [12, 2], [10, 2]]}\n"
+    )
+    line = refused(
+        check(tmp_path, text),
+        "blocks 3, 4 are held by nothing",
+        "touch one another but no fixed block",
+    )
+    assert "singular" not in line
+
+
+def test_engine_api_bounds():
+    with pytest.raises(rd.InputError, match=r"load_steps.*use 1 to 1000"):
+        rd.Settings(load_steps=10**9)
+    with pytest.raises(rd.InputError, match="tolerance"):
+        rd.Settings(tolerance=1e-300)
+    ground = [(-5, -1), (5, -1), (5, 0), (-5, 0)]
+    block = [(0, 0), (1, 0), (1, 1), (0, 1)]
+    far = [(1e300, 0), (1e300 + 1e290, 0), (1e300, 1e290)]
+    with pytest.raises(rd.InputError, match=r"^block 7: lies 1e\+300 from the other blocks"):
+        rd.Blocks.from_polygons([ground, block, far], ids=[0, 1, 7])
+    with pytest.raises(rd.InputError, match="64 bits"):
+        rd.Blocks.from_polygons([ground, block], ids=[0, 10**30])
+    with pytest.raises(rd.InputError, match="unit weight 1e\\+300 is out of range"):
+        rd.Blocks.from_polygons([ground, block], unit_weight=1e300)
+
+
+def test_parse_model_bounds_in_process():
+    with pytest.raises(ModelFileError, match="refers to the node"):
+        parse_model(BOX + "description: &d [*d]\n")
+    model, _ = parse_model(BOX)
+    assert model.blocks.n_blocks == 3 and math.isclose(model.blocks.weight[1], 50)
+
+
+# --------------------------------------------------------- destinations
+def test_schema_does_not_overwrite_without_overwrite(tmp_path):
+    model = tmp_path / "m.yaml"
+    model.write_text(BOX)
+    refused(inproc("schema", "--out", "m.yaml", cwd=tmp_path), "exists already", "--overwrite")
+    assert model.read_text() == BOX
+    r = inproc("schema", "--out", "m.yaml", "--overwrite", cwd=tmp_path)
+    assert r.returncode == 0 and model.read_text().startswith("{")
+
+
+def test_results_never_overwrite_the_model(tmp_path):
+    (tmp_path / "model").mkdir()
+    model = tmp_path / "model" / "result.json"
+    model.write_text(BOX)
+    r = rockdem("run", "model/result.json", "--out", "model", "--overwrite", cwd=tmp_path)
+    refused(r, "--out model", "over the model file")
+    assert model.read_text() == BOX
+    assert sorted(p.name for p in (tmp_path / "model").iterdir()) == ["result.json"]
+
+
+def test_a_plot_never_overwrites_the_model(tmp_path):
+    (tmp_path / "m.png").write_text(BOX)
+    r = inproc("plot", "m.png", "--what", "model", "--out", "m.png", "--overwrite", cwd=tmp_path)
+    refused(r, "is the model file")
+    assert (tmp_path / "m.png").read_text() == BOX
+
+
+def test_a_result_name_taken_by_a_folder_writes_nothing(tmp_path):
+    (tmp_path / "m.yaml").write_text(BOX)
+    (tmp_path / "out" / "result.json").mkdir(parents=True)
+    r = rockdem("run", "m.yaml", "--out", "out", "--overwrite", cwd=tmp_path)
+    refused(r, "result.json is a folder")
+    assert sorted(p.name for p in (tmp_path / "out").iterdir()) == ["result.json"]
+
+
+@pytest.mark.parametrize("command", ["run", "fos", "stabilise", "report"])
+def test_out_under_a_file_is_refused_before_computing(tmp_path, command):
+    (tmp_path / "m.yaml").write_text(BOX)
+    r = rockdem(command, "m.yaml", "--out", "m.yaml/results", cwd=tmp_path)
+    refused(r, "--out m.yaml/results", "is a file, not a folder")
+
+
+def test_stabilise_does_not_overwrite_earlier_results(tmp_path):
+    (tmp_path / "m.yaml").write_text(BOX)
+    (tmp_path / "out").mkdir()
+    (tmp_path / "out" / "measures.csv").write_text("mine")
+    refused(
+        rockdem("stabilise", "m.yaml", "--out", "out", cwd=tmp_path), "already holds measures.csv"
+    )
+    assert (tmp_path / "out" / "measures.csv").read_text() == "mine"
+
+
+@pytest.mark.skipif(
+    not hasattr(os, "geteuid") or os.geteuid() == 0, reason="root may write into read-only folders"
+)
+def test_a_read_only_out_folder_is_refused_before_computing(tmp_path):
+    (tmp_path / "m.yaml").write_text(BOX)
+    ro = tmp_path / "ro"
+    ro.mkdir()
+    ro.chmod(0o555)
+    try:
+        refused(rockdem("run", "m.yaml", "--out", "ro/results", cwd=tmp_path), "not writable")
+    finally:
+        ro.chmod(0o755)
+
+
+def test_example_copy_never_follows_a_link(tmp_path):
+    folder = tmp_path / "copy"
+    folder.mkdir()
+    outside = tmp_path / "outside.yaml"
+    (folder / "toppling.yaml").symlink_to(outside)  # dangling
+    r = rockdem("example", "copy", "toppling", "copy", "--overwrite", cwd=tmp_path)
+    refused(r, "is a link")
+    assert not outside.exists()
+
+
+def test_bounded_reading_keeps_normal_files_working(tmp_path):
+    """The stricter reader still takes YAML, JSON and TOML models as before."""
+    import json
+
+    import yaml
+
+    data = yaml.safe_load(BOX)
+    (tmp_path / "m.json").write_text(json.dumps(data))
+    r = rockdem("check", "m.json", cwd=tmp_path)
+    assert r.returncode == 0, r.stderr
+    assert np.isclose(float(r.stdout.split("free weight ")[1].split()[0]), 100)
