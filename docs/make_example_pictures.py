@@ -49,7 +49,7 @@ def removal(name: str, target: float, file: str, **kw) -> None:
     model, _ = load_model(example_path(name))
     s = stabilise(model, target, **kw)
     shown = [t for t in s.trials if t.accepted]
-    size = (max(8.5, 6.5 * len(shown)), 4.8)
+    size = (max(8.5, 7.5 * len(shown)), 4.8)
     fig, axes = plt.subplots(1, len(shown), figsize=size, squeeze=False)
     for ax, t in zip(axes[0], shown, strict=True):
         trial_picture(t, model, target, ax=ax)
@@ -67,8 +67,8 @@ def inclined_designs() -> None:
     for ax, d in zip(axes, s.designs, strict=True):
         f = d.then.final.fos if d.then is not None else d.fos
         shown = d.fos.failed_analysis if not d.reached else d.fos.stable_analysis
-        more = (f"; then {len(d.then.removed_blocks)} more blocks: total area "
-                f"{d.total_removed_area:.2f}, FS {f.value:.2f}") if d.then else ""
+        more = (f"\nthen {len(d.then.removed_blocks)} more blocks: total area "
+                f"{d.total_removed_area:.2f} m^2, FS {f.value:.2f}") if d.then else ""
         plot_failure(shown, ax=ax, legend=False,
                      title=f"{d.name}: area {d.removed_area:.2f} m^2 removed, "
                            f"{'stable' if d.reached else 'unstable'}\n(FS {d.fos.value:.3f}; "

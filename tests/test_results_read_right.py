@@ -194,9 +194,10 @@ def test_joints_failed_in_tension_and_closed_again_are_history_not_open(bedded):
     sp_now = a.springs.current
     assert len(coll["interfaces-open"].get_segments()) == int((sp_now == 3).sum())
     assert len(coll["interfaces-closed-failed-earlier"].get_segments()) == int((sp_now == 1).sum())
-    labels = [t.get_text() for t in ax.get_legend().get_texts()]
+    legend = plots.state.failure_legend(ax)
+    labels = [t.get_text() for t in legend.get_texts()]
     assert any(t.startswith("failed earlier, now closed (") for t in labels)
-    assert ax.get_legend().get_title().get_text().startswith("joints now")
+    assert legend.get_title().get_text().startswith("joints now")
 
 
 def test_tables_and_csv_keep_the_current_state_apart_from_the_history(bedded, tmp_path):

@@ -149,6 +149,7 @@ def plot_failure(
     fos = result if isinstance(result, c.FactorOfSafety) else None
     system = a.system
     blocks = system.blocks
+    own = ax is None  # a figure of our own: its legend can sit in the layout
     ax = c.new_axes(ax)
     fr = frames(a)
     frame = fr[-1 if step is None else step]
@@ -187,17 +188,23 @@ def plot_failure(
                 Line2D([], [], color=c.SLIP_COLOR, lw=6, alpha=0.6, label="slip surface")
             )
         handles += mode_handles
-        ax.legend(  # beside the model, not over it
-            handles=handles,
-            loc="upper left",
-            bbox_to_anchor=(1.01, 1.0),
-            borderaxespad=0.0,
-            fontsize=7,
-            framealpha=0.9,
-            title="joints now (interfaces)" if now else "failure history (interfaces)",
-            title_fontsize=7,
-        )
+        style = {
+            "handles": handles,
+            "fontsize": 7,
+            "framealpha": 0.9,
+            "title": "joints now (interfaces)" if now else "failure history (interfaces)",
+            "title_fontsize": 7,
+        }
+        if own:  # beside the model, inside the figure's constrained layout
+            ax.figure.legend(loc="outside right upper", **style)
+        else:  # beside the model, in the caller's layout
+            ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0, **style)
     return ax
+
+
+def failure_legend(ax: Axes):
+    """The legend :func:`plot_failure` drew (on the axes, or on its own figure)."""
+    return ax.get_legend() or (ax.figure.legends[-1] if ax.figure.legends else None)
 
 
 def _draw_modes(ax: Axes, a) -> list:
@@ -390,7 +397,7 @@ def animate_progressive(
     fps: float = 1.5,
     dpi: int = 90,
     unit: str = "m",
-    figsize=(7.0, 4.5),
+    figsize=(9.0, 4.5),
     hold: int = 3,
 ) -> Path:
     """Write the progressive failure as an animated GIF (matplotlib's PillowWriter).
@@ -408,7 +415,7 @@ def animate_progressive(
     a = c.as_analysis(result)
     out = Path(out_file)
     fig = Figure(figsize=figsize)
-    ax = fig.add_axes((0.1, 0.1, 0.86, 0.8))
+    ax = fig.add_axes((0.07, 0.1, 0.66, 0.8))  # room for the legend on the right
     writer = PillowWriter(fps=fps)
     fr = frames(a)
     with writer.saving(fig, str(out), dpi):

@@ -256,7 +256,7 @@ def trial_picture(trial, original: Model, target: float, *, ax=None, title: str 
         title = (
             f"trial {trial.number}: {trial.label}\n{len(trial.removed_blocks)} blocks "
             f"removed (area {trial.removed_area:.2f}), FS {describe(trial.fos)}, "
-            f"target {target:g}; state shown at F = {format_factor(shown.strength_factor)}"
+            f"target {target:g}\nstate shown at F = {format_factor(shown.strength_factor)}"
         )
     ax = plot_failure(shown, ax=ax, title=title)
     b = original.blocks
