@@ -86,3 +86,14 @@ def test_the_model_is_not_changed_by_an_analysis():
     assert np.array_equal(model.blocks.vertices, before)
     with pytest.raises(ValueError):  # arrays are read-only
         model.blocks.vertices[0, 0] = 1.0
+
+
+def test_python_api_names_the_blocks_nothing_holds():
+    """Built in Python (no model file): a model with no fixed block is refused
+    naming the blocks and the fix, not as a singular stiffness."""
+    blocks = rd.Blocks.from_polygons(
+        [[(0, 0), (1, 0), (1, 1), (0, 1)], [(1, 0), (2, 0), (2, 1), (1, 1)]], fixed=[False, False]
+    )
+    model = rd.Model(blocks, rd.Joint(normal_stiffness=1e6, friction_angle=30))
+    with pytest.raises(rd.InputError, match=r"blocks 0, 1.*held by nothing.*fixed"):
+        rd.analyse(model)

@@ -29,7 +29,7 @@ import scipy.sparse as sp
 from .assembly import Assembly, build_assembly
 from .blocks import Blocks
 from .errors import InputError
-from .interfaces import Interfaces, assign_joints, find_interfaces
+from .interfaces import Interfaces, assign_joints, check_held, find_interfaces
 from .linalg import Factorizer, factorize, norm
 from .loads import block_loads
 from .model import Model
@@ -116,6 +116,7 @@ def build_system(model: Model, f_block: np.ndarray | None = None) -> System:
         try:
             lu0 = factorize(K0)
         except RuntimeError as exc:
+            check_held(blocks, faces)  # a group of blocks nothing holds: name it
             raise InputError(
                 "model",
                 "the elastic stiffness is singular: some block is not held against "
