@@ -443,7 +443,7 @@ def test_cli_json_csv_and_report_carry_modes_and_boundary_warnings(tmp_path):
     r = runner.invoke(app, ["run", str(path)])
     assert r.exit_code == 0, r.output
     assert "warning: the mechanism reaches the fixed back boundary at x = -8" in r.stdout
-    assert "slides (1): 2" in r.stdout
+    assert "unstable blocks (1): 2" in r.stdout and "failure mode: all slides" in r.stdout
     doc = json.loads(runner.invoke(app, ["run", str(path), "--json"]).stdout)
     assert doc["failure_modes"] == {"slides": [2]}
     assert len(doc["warnings"]) == 2 and doc["boundary_contacts"][0]["blocks"] == [2]

@@ -287,7 +287,8 @@ def fos_summary(fos) -> dict[str, Any]:
 
     ``factor_of_safety`` is None when strength does not control the
     mechanism; an open upper end of ``bracket`` is None (infinity).
-    ``mechanism_blocks`` are the blocks moving at the unstable end, with their
+    ``mechanism_blocks`` are the blocks moving at the unstable end (the strength
+    factor of that state: ``mechanism_factor``), with their
     ``failure_modes``, ``boundary_contacts`` and ``warnings``
     (:func:`mechanism_summary`).
     """
@@ -301,6 +302,7 @@ def fos_summary(fos) -> dict[str, Any]:
             "certified_upper_bound": fos.certified_upper_bound,
             "definition": fos.definition,
             "mechanism_blocks": [] if failed is None else [int(i) for i in failed.unstable_blocks],
+            "mechanism_factor": None if failed is None else failed.strength_factor,
             **mechanism_summary(failed),
             "trials": [
                 {

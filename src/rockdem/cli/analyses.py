@@ -9,6 +9,7 @@ from typing import Any
 from rich.markup import escape
 from rich.table import Table
 
+from ..results import format_factor
 from ..units import parse_units
 from .common import (
     DebugOpt,
@@ -176,8 +177,12 @@ _NOW = {
 def _print_mechanism(doc: dict[str, Any]) -> None:
     """Failure mode per block and the model-boundary warnings of a summary."""
     modes = doc.get("failure_modes") or {}
-    for mode, ids in modes.items():
-        out.print(f"  {mode} ({len(ids)}): {_ids(ids, 20)}")
+    if len(modes) == 1:
+        out.print(f"  failure mode: all {next(iter(modes))}")
+    elif modes:
+        out.print("  failure modes:")
+        for mode, ids in modes.items():
+            out.print(f"    {mode} ({len(ids)}): {_ids(ids, 20)}")
     for text in doc.get("warnings") or []:
         out.print(f"[bold yellow]warning[/bold yellow]: {escape(text)}")
 
@@ -261,6 +266,7 @@ def _print_fos(doc: dict[str, Any]) -> None:
         )
     blocks = doc["mechanism_blocks"]
     if blocks:
-        out.print(f"mechanism blocks ({len(blocks)}): {_ids(blocks)}")
+        at = format_factor(doc["mechanism_factor"])
+        out.print(f"mechanism blocks ({len(blocks)}, failed state at F = {at}): {_ids(blocks)}")
     _print_mechanism(doc)
     out.print(f"definition: {escape(doc['definition'])}")
