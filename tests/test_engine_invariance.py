@@ -3,16 +3,20 @@ system, or on the absolute spring stiffness (c = 0)."""
 
 import numpy as np
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 import rockdem as rd
 from rockdem import verification as V
 
 
-def _model(kn=1e6, shift=(0.0, 0.0), scale=1.0, order=None, c=0.0):
-    """The 66-block bedded slope, transformed; lengths x scale, forces consistently."""
+def _model(kn=1e6, shift=(0.0, 0.0), scale=1.0, order=None, c=0.0, mirror=False):
+    """The 66-block bedded slope, transformed; lengths x scale, forces consistently;
+    ``mirror``: reflected left to right (the slope faces the other way)."""
     base = V.bedding_slope(bedding_spacing=3.0, cross_spacing=4.5)
     b = base.blocks
-    polys = [b.outline(i) * scale + np.asarray(shift) for i in range(b.n_blocks)]
+    flip = np.array([-1.0 if mirror else 1.0, 1.0])
+    polys = [b.outline(i) * flip * scale + np.asarray(shift) for i in range(b.n_blocks)]
     ids = np.arange(b.n_blocks)
     order = np.arange(b.n_blocks) if order is None else order
     blocks = rd.Blocks.from_polygons(
@@ -61,6 +65,23 @@ def test_site_coordinates_keep_every_interface(reference, shift):
     """A closing vertex is dropped only within a tolerance relative to the
     model's size: far from the origin no vertex may merge, no interface vanish."""
     fos, unstable, failed = _summary(_model(shift=shift))
+    assert fos.failed_analysis.interfaces.n_interfaces == (
+        reference[0].failed_analysis.interfaces.n_interfaces
+    )
+    assert fos.value == pytest.approx(reference[0].value, rel=1e-6)
+    assert unstable == reference[1] and failed == reference[2]
+
+
+@settings(max_examples=6, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(
+    dx=st.floats(-1e7, 1e7, allow_nan=False),
+    dy=st.floats(-1e7, 1e7, allow_nan=False),
+    mirror=st.booleans(),
+)
+def test_any_translation_up_to_1e7_and_mirroring(reference, dx, dy, mirror):
+    """Site coordinates (UTM, mine grids) and a section drawn the other way
+    round: the same interfaces, failed joints, unstable blocks and factor."""
+    fos, unstable, failed = _summary(_model(shift=(dx, dy), mirror=mirror))
     assert fos.failed_analysis.interfaces.n_interfaces == (
         reference[0].failed_analysis.interfaces.n_interfaces
     )
