@@ -101,3 +101,15 @@ def test_bedded_slope_mechanism_slides_along_the_bedding_for_any_schedule():
         angle = np.degrees(np.arctan2(-mech[moving, 1], mech[moving, 0]))
         assert np.median(angle) == pytest.approx(30.0, abs=2.0)
     assert sets[0] == sets[1]
+
+
+def test_the_failed_state_is_that_of_the_limit_not_of_the_trial():
+    """Issue 10: the failed analysis of a factor-of-safety search is the state
+    where equilibrium was lost (the top of the bracket), whatever trial
+    target the search tried: the wedge (the paper's Eq. 7) with a large
+    growth step still reports its failed state within the bracket."""
+    fos = rd.factor_of_safety(V.two_block_wedge(35, 30), grow=3.0)
+    lo, hi = fos.bracket
+    assert fos.failed_analysis.strength_factor == pytest.approx(hi, rel=1e-12)
+    assert hi - lo <= 0.005
+    assert all(t.factor > hi for t in fos.trials if not t.stable)  # the trials went further

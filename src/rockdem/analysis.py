@@ -236,12 +236,16 @@ def _held(system: System, resp) -> np.ndarray:
     return (label[:n] == label[ground]) | system.blocks.fixed
 
 
-def _package(system, sol, state, load_factor, factor, stable, steps, q_ok, near_limit=False):
+def _package(
+    system, sol, state, load_factor, factor, stable, steps, q_ok, near_limit=False, drive=None
+):
     """Assemble an :class:`Analysis` from the last solve.
 
     ``near_limit``: the failed solve continued from an equilibrium just below
     the limit (a strength trial); the blocks that state no longer holds
-    narrow the moving blocks down to the mechanism.
+    narrow the moving blocks down to the mechanism.  ``drive``: the factor
+    whose out-of-balance drives the Newton-step mechanism (the trial's
+    target), where it differs from the state's ``factor``.
     """
     asm = system.assembly
     free = ~system.blocks.fixed
@@ -254,7 +258,8 @@ def _package(system, sol, state, load_factor, factor, stable, steps, q_ok, near_
     else:
         resp = sol.response
         lam_fail = steps[-1].load_factor if steps else load_factor
-        mech, unstable = _mechanism(system, sol, state, lam_fail, factor)
+        drive = factor if drive is None else drive
+        mech, unstable = _mechanism(system, sol, state, lam_fail, drive)
         if near_limit and sol.reached_q is not None:
             resp_limit, _ = residual(system, sol.reached_q, state, lam_fail, sol.reached)
             free = unstable & ~_held(system, resp_limit)
@@ -516,4 +521,10 @@ def _continue(system: System, base: Analysis, factor: float, stage: int, q0=None
     steps = (*base.steps, step)
     if sol.converged:
         return _package(system, sol, state, lam, factor, True, steps, sol.q), sol
-    return _package(system, sol, start, lam, factor, False, steps, q_base, near_limit=True), sol
+    # the state of the limit: at the factor where equilibrium was lost (the
+    # Newton step that hints at the mechanism keeps the trial's drive)
+    at = sol.failed_at if sol.failed_at is not None else factor
+    failed = _package(
+        system, sol, start, lam, at, False, steps, q_base, near_limit=True, drive=factor
+    )
+    return failed, sol
