@@ -48,7 +48,7 @@ def box(tmp_path) -> Path:
 def test_check_prints_a_summary(box):
     r = invoke("check", box)
     assert r.exit_code == 0, r.output
-    assert "blocks: 3 (2 free, 1 fixed); free weight 100" in r.stdout
+    assert "blocks: 3 (2 free, 1 fixed); free weight 100 kN (area 4 m^2)" in r.stdout
     assert "weights: 1: 50, 2: 50" in r.stdout
     lines = [ln.split() for ln in r.stdout.splitlines()]
     assert ["bedding", "2", "4"] in lines  # two interfaces of total length 4

@@ -9,6 +9,7 @@ from rich.markup import escape
 from rich.table import Table
 
 from ..linalg import backend
+from ..units import parse_units
 from .common import (
     DebugOpt,
     ExampleOpt,
@@ -87,9 +88,11 @@ def _print_check(s: dict[str, Any]) -> None:
     b = s["blocks"]
     out.print(f"[bold]{escape(s['model_name'])}[/bold]  ({escape(s['model_file'])}): valid")
     out.print(f"units: {escape(s['units']) or '(not stated: add a `units:` note)'}")
+    units = parse_units(s["units"])
+    force, area = units.suffix("force", " {}"), units.suffix("area", " {}")
     out.print(
         f"blocks: {b['total']} ({b['free']} free, {b['fixed']} fixed); "
-        f"free weight {b['free_weight']:.6g} (area {b['free_area']:.6g})"
+        f"free weight {b['free_weight']:.6g}{force} (area {b['free_area']:.6g}{area})"
     )
     weights = sorted(b["weights"].items())
     if weights and len(weights) <= 20:
