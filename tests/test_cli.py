@@ -437,3 +437,20 @@ def test_subprocess_writes_results(tmp_path):
 def test_subprocess_no_arguments_prints_help():
     p = _python_m()
     assert "Usage: rockdem" in p.stdout + p.stderr
+
+
+def test_version_answers_without_loading_the_engine():
+    """`rockdem --version` (issue 10: start-up) prints the version without
+    importing SciPy, PARDISO or matplotlib: the package loads its names lazily."""
+    import subprocess
+    import sys
+
+    code = (
+        "import sys; sys.argv = ['rockdem', '--version']\n"
+        "from rockdem._launch import main; main()\n"
+        "heavy = [m for m in ('scipy', 'pypardiso', 'matplotlib') if m in sys.modules]\n"
+        "print('heavy:', heavy)"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.splitlines() == ["rockdem 0.1.0", "heavy: []"]

@@ -13,15 +13,41 @@ progressive failure, and the factor of safety by strength reduction.
 True
 """
 
-from .analysis import analyse, factor_of_safety
-from .blocks import Blocks
-from .errors import InputError, RockdemError
-from .joints import Joint
-from .model import LineLoad, Loads, Model, PointLoad, Settings
-from .results import Analysis, FactorOfSafety
-from .solver import build_system
+from importlib import import_module
 
 __version__ = "0.1.0"
+
+#: public names and the module that defines each: imported on first use, so
+#: that ``rockdem --version`` and light scripts do not load SciPy and PARDISO
+_PUBLIC = {
+    "analyse": ".analysis",
+    "factor_of_safety": ".analysis",
+    "Blocks": ".blocks",
+    "InputError": ".errors",
+    "RockdemError": ".errors",
+    "Joint": ".joints",
+    "LineLoad": ".model",
+    "Loads": ".model",
+    "Model": ".model",
+    "PointLoad": ".model",
+    "Settings": ".model",
+    "Analysis": ".results",
+    "FactorOfSafety": ".results",
+    "build_system": ".solver",
+}
+
+
+def __getattr__(name: str):
+    if name in _PUBLIC:
+        value = getattr(import_module(_PUBLIC[name], __name__), name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module 'rockdem' has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_PUBLIC))
+
 
 __all__ = [
     "Analysis",

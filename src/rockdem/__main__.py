@@ -1,5 +1,5 @@
 """``python -m rockdem``: the command line."""
 
-from .cli import main
+from ._launch import main
 
 main()

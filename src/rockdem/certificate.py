@@ -21,7 +21,6 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 import scipy.sparse as sp
-from scipy.optimize import linprog
 
 from .spring_law import SpringState, strength
 
@@ -115,6 +114,8 @@ def admissible_load(
     bounds[2 * n] = (0.0, MU_CAP)
     cost = np.zeros(2 * n + 1)
     cost[-1] = -1.0
+    from scipy.optimize import linprog  # 0.3 s to import: only when an LP is solved
+
     res = linprog(
         cost,
         A_ub=A_ub,

@@ -24,10 +24,19 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-try:  # optional accelerator
-    import pypardiso as _pypardiso
-except ImportError:  # pragma: no cover - depends on the installation
-    _pypardiso = None
+_PYPARDISO: object = False  # not looked for yet; None when not installed
+
+
+def _pardiso_module():
+    """pypardiso, imported on first use (0.2 s: not at ``rockdem --version``)."""
+    global _PYPARDISO
+    if _PYPARDISO is False:
+        try:  # optional accelerator
+            import pypardiso
+        except ImportError:  # pragma: no cover - depends on the installation
+            pypardiso = None
+        _PYPARDISO = pypardiso
+    return _PYPARDISO
 
 
 #: smallest system (unknowns) factorised with PARDISO when it is installed
@@ -40,7 +49,7 @@ _MKL_RT: str | None = None  # the MKL library found by the first PARDISO handle
 def backend(n: int = PARDISO_FROM + 1) -> str:
     """The factorisation used for ``n`` unknowns: ``"pardiso"`` or ``"superlu"``."""
     forced = os.environ.get("ROCKDEM_SOLVER", "").lower() == "superlu"
-    if _pypardiso is not None and not forced and n > PARDISO_FROM:
+    if n > PARDISO_FROM and not forced and _pardiso_module() is not None:
         return "pardiso"
     return "superlu"
 
@@ -51,7 +60,7 @@ def _pardiso_handle():
     global _MKL_RT
     if _MKL_RT is not None:
         os.environ.setdefault("PYPARDISO_MKL_RT", _MKL_RT)
-    solver = _pypardiso.PyPardisoSolver(mtype=11)  # real non-symmetric
+    solver = _pardiso_module().PyPardisoSolver(mtype=11)  # real non-symmetric
     _MKL_RT = solver.libmkl._name
     return solver
 
@@ -117,7 +126,7 @@ class Factorizer:
         self._solver.set_phase(phase)
         try:
             self._solver._call_pardiso(self._csr, np.zeros(A.shape[0]))
-        except _pypardiso.pardiso_wrapper.PyPardisoError as exc:
+        except _pardiso_module().pardiso_wrapper.PyPardisoError as exc:
             self._key = None  # analyse again next time
             raise RuntimeError(f"PARDISO: {exc}") from exc
         self.generation += 1
