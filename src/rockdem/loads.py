@@ -95,3 +95,100 @@ def _split_line_loads(blocks: Blocks, loads: Loads):
         forces.append(np.outer(lengths[ok], q))
         names += [name] * int(ok.sum())
     return np.concatenate(xy), np.concatenate(forces), names
+
+
+def pore_pressure(loads: Loads, points: np.ndarray) -> np.ndarray:
+    """Hydrostatic water pressure ``gamma_w (h(x) - y)`` at ``points`` (n, 2),
+    zero above the water table (and everywhere without one)."""
+    if not loads.water_table:
+        return np.zeros(len(points))
+    table = np.asarray(loads.water_table)
+    head = np.interp(points[:, 0], table[:, 0], table[:, 1])
+    return loads.water_unit_weight * np.maximum(head - points[:, 1], 0.0)
+
+
+def water_loads(blocks: Blocks, faces, loads: Loads) -> np.ndarray:
+    """Forces and moments ``(fx, fy, m)`` of joint water on each block.
+
+    On every interface the pressure ``u`` acts on both faces: it pushes block
+    b along the normal (from a to b) and block a the other way.  ``u`` is
+    piecewise linear along an interface (kinks where the water table bends
+    or crosses it), so it is integrated exactly piece by piece, not sampled
+    at the spring points.  It is a load: strength reduction does not reduce
+    it.
+    """
+    f = np.zeros((blocks.n_blocks, 3))
+    if not loads.water_table:
+        return f
+    table = np.asarray(loads.water_table)
+    p0, p1 = faces.start, faces.end
+    d = p1 - p0
+    length = np.hypot(d[:, 0], d[:, 1])
+    # the table's pieces, with flat extensions beyond its ends
+    xs = np.concatenate([[-np.inf], table[:, 0], [np.inf]])
+    hs = np.concatenate([[table[0, 1]], table[:, 1], [table[-1, 1]]])
+    force = np.zeros(len(length))
+    arm = np.zeros(len(length))  # force x distance from p0 along the interface
+    for j in range(len(xs) - 1):
+        lo, hi = xs[j], xs[j + 1]
+        t0, t1 = _clip_to_x(p0[:, 0], d[:, 0], lo, hi)
+        piece = t1 > t0
+        if not piece.any():
+            continue
+        finite = np.isfinite(lo) and np.isfinite(hi)
+        slope = (hs[j + 1] - hs[j]) / (hi - lo) if finite else 0.0
+        base, x_ref = (hs[j], lo) if np.isfinite(lo) else (hs[j + 1], 0.0)
+        g0, g1 = (
+            base + slope * (p0[:, 0] + t * d[:, 0] - x_ref) - (p0[:, 1] + t * d[:, 1])
+            for t in (t0, t1)
+        )  # head above each end of the piece
+        F, s_bar = _positive_part(g0, g1, (t1 - t0) * length)
+        wet = piece & (F > 0)
+        force += np.where(wet, F, 0.0)
+        arm += np.where(wet, F * (t0 * length + np.where(wet, s_bar, 0.0)), 0.0)
+    force *= loads.water_unit_weight
+    arm *= loads.water_unit_weight
+    at = np.divide(arm, force, out=np.zeros_like(arm), where=force > 0)
+    tangent = np.divide(d, length[:, None], out=np.zeros_like(d), where=length[:, None] > 0)
+    point = p0 + at[:, None] * tangent
+    push = force[:, None] * faces.normal  # on block b; -push on block a
+    for k, sign in ((faces.block_b, 1.0), (faces.block_a, -1.0)):
+        r = point - blocks.centroid[k]
+        fk = sign * push
+        np.add.at(f[:, 0], k, fk[:, 0])
+        np.add.at(f[:, 1], k, fk[:, 1])
+        np.add.at(f[:, 2], k, r[:, 0] * fk[:, 1] - r[:, 1] * fk[:, 0])
+    return f
+
+
+def _clip_to_x(x0, dx, lo, hi):
+    """Parameter range ``[t0, t1]`` of each segment ``x0 + t dx`` (t in [0, 1])
+    with ``lo <= x < hi`` (vertical segments: all or nothing)."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ta = (lo - x0) / dx
+        tb = (hi - x0) / dx
+    t0 = np.where(dx > 0, ta, np.where(dx < 0, tb, 0.0))
+    t1 = np.where(dx > 0, tb, np.where(dx < 0, ta, 1.0))
+    vertical_in = (x0 >= lo) & (x0 < hi)
+    t0 = np.where(dx == 0, np.where(vertical_in, 0.0, 1.0), t0)
+    t1 = np.where(dx == 0, np.where(vertical_in, 1.0, 0.0), t1)
+    t0, t1 = (np.clip(np.nan_to_num(t, nan=0.0), 0.0, 1.0) for t in (t0, t1))
+    return t0, t1
+
+
+def _positive_part(g0, g1, L):
+    """Integral of ``max(g, 0)`` for ``g`` linear from ``g0`` to ``g1`` over a
+    length ``L``, and the distance of its centroid from the ``g0`` end."""
+    both = (g0 >= 0) & (g1 >= 0)
+    first = (g0 > 0) & (g1 < 0)  # wet from the g0 end to the crossing
+    last = (g0 < 0) & (g1 > 0)  # wet from the crossing to the g1 end
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        s_both = L * (g0 + 2 * g1) / (3 * (g0 + g1))
+        cross = np.where(first | last, L * g0 / np.where(first | last, g0 - g1, 1.0), 0.0)
+    total = np.where(both, 0.5 * (g0 + g1) * L, 0.0)
+    total = np.where(first, 0.5 * g0 * cross, total)
+    total = np.where(last, 0.5 * g1 * (L - cross), total)
+    s_bar = np.where(both & (g0 + g1 > 0), s_both, 0.0)
+    s_bar = np.where(first, cross / 3, s_bar)
+    s_bar = np.where(last, cross + 2 * (L - cross) / 3, s_bar)
+    return total, np.nan_to_num(s_bar)

@@ -68,6 +68,13 @@ class Loads:
     seismic_v : float
         Pseudo-static vertical coefficient: a force ``kv W`` downward.
     points, lines : sequences of PointLoad, LineLoad
+    water_table : sequence of (x, y), optional
+        Phreatic line, left to right (level beyond its ends).  Every joint
+        below it carries the hydrostatic pressure ``u = gamma_w (h(x) - y)``
+        on both its faces; the springs carry the effective stress.
+    water_unit_weight : float
+        ``gamma_w`` in the model's units (9.81 kN/m^3, 1.0 t/m^3); required
+        with a water table.
     """
 
     gravity: bool = True
@@ -75,6 +82,8 @@ class Loads:
     seismic_v: float = 0.0
     points: tuple[PointLoad, ...] = ()
     lines: tuple[LineLoad, ...] = ()
+    water_table: tuple[tuple[float, float], ...] = ()
+    water_unit_weight: float = 0.0
 
     def __post_init__(self) -> None:
         for key in ("seismic_h", "seismic_v"):
@@ -83,6 +92,23 @@ class Loads:
                 raise InputError(f"loads {key}", f"{v} is out of range", "use |k| < 1")
         object.__setattr__(self, "points", tuple(self.points))
         object.__setattr__(self, "lines", tuple(self.lines))
+        table = tuple((float(x), float(y)) for x, y in self.water_table)
+        object.__setattr__(self, "water_table", table)
+        if table:
+            xy = np.asarray(table)
+            if len(xy) < 2 or not np.isfinite(xy).all() or np.any(np.diff(xy[:, 0]) <= 0):
+                raise InputError(
+                    "loads water_table",
+                    "needs two or more finite points with x increasing",
+                    "give the phreatic line left to right",
+                )
+            gw = self.water_unit_weight
+            if not (np.isfinite(gw) and gw > 0):
+                raise InputError(
+                    "loads water_unit_weight",
+                    f"{gw} is not a positive unit weight",
+                    "give the unit weight of water in the model's units (9.81 kN/m^3, 1 t/m^3)",
+                )
 
 
 #: Most load steps and Newton iterations per solve (every count of work is bounded).

@@ -76,6 +76,8 @@ def _loads(cfg: ModelFile, names: dict[str, Loc]):
         seismic_v=cfg.loads.seismic_v,
         points=tuple(points),
         lines=tuple(lines),
+        water_table=tuple(tuple(p) for p in cfg.loads.water_table),
+        water_unit_weight=cfg.loads.water_unit_weight or 0.0,
     )
 
 

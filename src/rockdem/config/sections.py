@@ -268,6 +268,13 @@ class LoadsSpec(_Section):
     """Point loads."""
     lines: list[LineLoadSpec] = []
     """Line loads."""
+    water_table: list[Point] = []
+    """Phreatic line `[[x, y], ...]` left to right (level beyond its ends): every
+    joint below it carries the hydrostatic pressure gamma_w (h - y) on both faces
+    (effective stress in the springs; not reduced by strength reduction)."""
+    water_unit_weight: UnitWeight | None = None
+    """Unit weight of water in the model's units (9.81 for kN and m, 1.0 for t and m);
+    required with a water table."""
 
 
 class SupportSpec(_Section):

@@ -1,0 +1,118 @@
+"""Joint water from a water table: pore pressure on both faces of every joint
+below it, a load that strength reduction does not reduce.  Verified against
+Hoek & Bray's plane failure with a water-filled tension crack (Hoek & Bray,
+Rock Slope Engineering, 3rd ed. 1981, ch. 7; Wyllie & Mah 2004, eq. 6.7):
+
+    FS = (c A + (W cos psi - U - V sin psi) tan phi) / (W sin psi + V cos psi)
+
+with U = gamma_w z_w A / 2 on the sliding plane (pressure falling linearly
+to zero where the plane daylights) and V = gamma_w z_w^2 / 2 in the crack.
+"""
+
+import numpy as np
+import pytest
+
+import rockdem as rd
+from rockdem.loads import pore_pressure
+
+H, FACE, PLANE, CRACK_X = 10.0, 60.0, 30.0, 12.0  # m, degrees, degrees, m
+FULL = H - CRACK_X * np.tan(np.radians(PLANE))  # depth of the crack, 3.07 m
+GAMMA, GAMMA_W, PHI, C = 26.0, 9.81, 35.0, 10.0  # kN/m^3, kN/m^3, degrees, kPa
+
+
+def _section(z_w: float):
+    """Sliding block between the face, the plane and a vertical crack at
+    x = CRACK_X; fixed rock below the plane and behind the crack; the water
+    table from z_w above the crack's foot straight down to the toe."""
+    t = np.tan(np.radians(PLANE))
+    crest = H / np.tan(np.radians(FACE))
+    foot = (CRACK_X, CRACK_X * t)
+    block = [(0.0, 0.0), foot, (CRACK_X, H), (crest, H)]
+    out = (H / t, H)  # where the plane reaches the upper surface
+    behind = [foot, out, (CRACK_X, H)]
+    ground = [(-20.0, -20.0 * t), out, (40.0, H), (40.0, -30.0), (-20.0, -30.0)]
+    blocks = rd.Blocks.from_polygons(
+        [ground, behind, block], fixed=[True, True, False], unit_weight=GAMMA
+    )
+    table = ((0.0, 0.0), (CRACK_X, foot[1] + z_w)) if z_w > 0 else ()
+    loads = rd.Loads(water_table=table, water_unit_weight=GAMMA_W)
+    # ductile: cohesion kept after yield, as limit equilibrium assumes
+    joint = rd.Joint(normal_stiffness=1e6, friction_angle=PHI, cohesion=C).ductile
+    return rd.Model(blocks, joint, loads=loads), blocks
+
+
+def _hoek_bray(z_w: float, weight: float) -> float:
+    psi = np.radians(PLANE)
+    A = CRACK_X / np.cos(psi)
+    U = 0.5 * GAMMA_W * z_w * A
+    V = 0.5 * GAMMA_W * z_w**2
+    resisting = C * A + (weight * np.cos(psi) - U - V * np.sin(psi)) * np.tan(np.radians(PHI))
+    return resisting / (weight * np.sin(psi) + V * np.cos(psi))
+
+
+@pytest.mark.parametrize("z_w", [0.0, 0.5 * FULL, FULL])
+def test_plane_failure_with_a_water_filled_tension_crack(z_w):
+    """FS within 0.5% of Hoek & Bray for a dry, half-filled and full crack."""
+    model, blocks = _section(z_w)
+    exact = _hoek_bray(z_w, float(blocks.weight[2]))
+    fos = rd.factor_of_safety(model, width=0.002)
+    assert fos.value == pytest.approx(exact, rel=0.005)
+
+
+def test_water_lowers_the_factor_and_is_not_reduced_by_strength_reduction():
+    """More water, lower FS; the water forces are the same in every trial
+    (they are loads: the system's external forces do not change with F)."""
+    values = [rd.factor_of_safety(_section(z)[0], width=0.002).value for z in (0, FULL / 2, FULL)]
+    assert values[0] > values[1] > values[2]
+    system = rd.build_system(_section(FULL)[0])
+    dry = rd.build_system(_section(0.0)[0])
+    water = system.f_block[2] - dry.f_block[2]
+    # uplift U normal to the plane plus crack thrust V toward -x, on the sliding block
+    psi = np.radians(PLANE)
+    U = 0.5 * GAMMA_W * FULL * CRACK_X / np.cos(psi)
+    V = 0.5 * GAMMA_W * FULL**2  # linear pressure on both joints: exact quadrature
+    expected = U * np.array([-np.sin(psi), np.cos(psi)]) + V * np.array([-1.0, 0.0])
+    assert water[:2] == pytest.approx(expected, rel=1e-9)
+
+
+def test_pore_pressure_is_hydrostatic_below_the_table_and_zero_above():
+    loads = rd.Loads(water_table=((0.0, 5.0), (10.0, 7.0)), water_unit_weight=10.0)
+    u = pore_pressure(loads, np.array([(0.0, 0.0), (5.0, 6.0), (10.0, 8.0), (20.0, 2.0)]))
+    assert u == pytest.approx([50.0, 0.0, 0.0, 50.0])
+
+
+@pytest.mark.parametrize(
+    "table, gw, words",
+    [
+        (((0.0, 1.0),), 9.81, "two or more"),
+        (((1.0, 1.0), (0.0, 2.0)), 9.81, "x increasing"),
+        (((0.0, 1.0), (1.0, 1.0)), 0.0, "water_unit_weight"),
+    ],
+)
+def test_bad_water_table_is_refused(table, gw, words):
+    with pytest.raises(rd.InputError, match=words):
+        rd.Loads(water_table=table, water_unit_weight=gw)
+
+
+def test_model_file_water_table(tmp_path):
+    """`loads: water_table` in a model file: the bundled bedded slope (face
+    rising to the left of the toe) with water 5 m deep below the crest,
+    falling to the toe, stands less well than dry; without
+    `water_unit_weight` the file is refused."""
+    from rockdem.config import load_model
+    from rockdem.examples import example_path
+
+    text = example_path("bedded-slope").read_text()
+    wet = text.replace(
+        "loads:\n  seismic_h: 0.0",
+        "loads:\n  seismic_h: 0.0\n  water_table: [[-30, 12], [-6, 5], [0, 0]]\n"
+        "  water_unit_weight: 9.81",
+    )
+    assert wet != text
+    (tmp_path / "wet.yaml").write_text(wet)
+    dry_fos = rd.factor_of_safety(load_model(example_path("bedded-slope"))[0]).value
+    wet_fos = rd.factor_of_safety(load_model(tmp_path / "wet.yaml")[0]).value
+    assert wet_fos < dry_fos * 0.98
+    (tmp_path / "no_gamma.yaml").write_text(wet.replace("  water_unit_weight: 9.81\n", ""))
+    with pytest.raises(rd.InputError, match="water_unit_weight"):
+        load_model(tmp_path / "no_gamma.yaml")
