@@ -116,3 +116,35 @@ def test_model_file_water_table(tmp_path):
     (tmp_path / "no_gamma.yaml").write_text(wet.replace("  water_unit_weight: 9.81\n", ""))
     with pytest.raises(rd.InputError, match="water_unit_weight"):
         load_model(tmp_path / "no_gamma.yaml")
+
+
+def test_pore_pressure_in_the_result_files(tmp_path):
+    """springs.csv carries the pore pressure (with the stress unit) beside the
+    effective normal stress: gamma_w z_w at the crack's foot."""
+    import csv
+
+    from rockdem.output import analysis_summary, analysis_tables, write_results
+
+    model, _ = _section(FULL)
+    a = rd.analyse(model)
+    write_results(tmp_path / "out", analysis_tables(a), analysis_summary(a))
+    with open(tmp_path / "out" / "springs.csv") as fh:
+        rows = list(csv.DictReader(fh))
+    key = next(k for k in rows[0] if k.startswith("pore_pressure"))
+    u = np.array([float(r[key]) for r in rows])
+    assert u.max() == pytest.approx(GAMMA_W * FULL, rel=0.2)  # deepest spring point
+    assert u.min() == 0.0  # joints above the water table are dry
+
+
+def test_model_picture_draws_the_water_table():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from rockdem.plots.model import plot_model
+
+    ax = plot_model(_section(FULL)[0])
+    lines = [ln for ln in ax.get_lines() if ln.get_gid() == "water-table"]
+    assert len(lines) == 1
+    _, y = lines[0].get_data()
+    assert y[0] == pytest.approx(0.0) and y[-1] == pytest.approx(H)  # toe, then the crest level
+    assert "water table" in [t.get_text() for t in ax.get_legend().get_texts()]

@@ -45,6 +45,7 @@ from typing import Any
 import numpy as np
 
 from .errors import InputError
+from .loads import pore_pressure
 from .modes import MODES, boundary_contacts, failure_modes
 from .results import CURRENT_NAMES
 from .spring_law import STATE_NAMES
@@ -162,6 +163,7 @@ def analysis_tables(analysis, modes=None) -> dict[str, list[dict[str, Any]]]:
     s = analysis.springs
     point_xy = system.springs.point
     fos, s_state, s_now = s.local_fos, s.state_name, s.current_name
+    water = pore_pressure(system.model.loads, point_xy)
     springs = [
         {
             "interface": int(s.interface[k]),
@@ -170,6 +172,7 @@ def analysis_tables(analysis, modes=None) -> dict[str, list[dict[str, Any]]]:
             "y": float(point_xy[k, 1]),
             "sigma": float(s.sigma[k]),
             "tau": float(s.tau[k]),
+            "pore_pressure": float(water[k]),
             "capacity": float(s.capacity[k]),
             "strength_at_factor": float(s.strength[k]),
             "state": str(s_state[k]),
@@ -347,7 +350,8 @@ COLUMN_QUANTITY = {
         "weight normal_force shear_force support_force free_weight force".split(), "force"
     ),
     **dict.fromkeys(
-        "normal_stress shear_stress sigma tau capacity strength_at_factor".split(), "stress"
+        "normal_stress shear_stress sigma tau pore_pressure capacity strength_at_factor".split(),
+        "stress",
     ),
     **dict.fromkeys(
         "centroid_x centroid_y start_x start_y end_x end_y x y length".split(), "length"
@@ -409,8 +413,8 @@ _COLUMNS = {
         "open_fraction sliding_fraction local_fos first_failure slip_surface".split()
     ),
     "springs": list(
-        "interface point x y sigma tau capacity strength_at_factor state current_state "
-        "first_failure local_fos".split()
+        "interface point x y sigma tau pore_pressure capacity strength_at_factor state "
+        "current_state first_failure local_fos".split()
     ),
 }
 

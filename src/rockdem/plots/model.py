@@ -136,6 +136,26 @@ def draw_loads(
     return arrows, np.vstack(tails_all)
 
 
+#: the water table's colour (Okabe-Ito sky blue)
+WATER_COLOR = "#56B4E9"
+
+
+def draw_water_table(ax: Axes, table, blocks) -> None:
+    """The phreatic line across the model (level beyond its ends), dashed."""
+    xy = np.asarray(table, dtype=float)
+    lo, hi = blocks.vertices[:, 0].min(), blocks.vertices[:, 0].max()
+    xs = np.concatenate([[lo], xy[(xy[:, 0] > lo) & (xy[:, 0] < hi), 0], [hi]])
+    ax.plot(
+        xs,
+        np.interp(xs, xy[:, 0], xy[:, 1]),
+        color=WATER_COLOR,
+        lw=1.5,
+        ls="--",
+        zorder=4,
+        gid="water-table",
+    )
+
+
 def draw_block_ids(ax: Axes, blocks, centroids=None, *, free_only: bool = False) -> None:
     """Block ids written at the centroids (gid ``"block-id"``)."""
     centroids = blocks.centroid if centroids is None else centroids
@@ -223,6 +243,8 @@ def plot_model(
         # room for the arrows and for the labels above their tails
         lift = np.array([0.0, 0.04 * blocks.extent])
         tails = np.vstack([tails, tails + lift])
+    if loads and mdl.loads.water_table:
+        draw_water_table(ax, mdl.loads.water_table, blocks)
     if block_ids:
         draw_block_ids(ax, blocks, free_only=True)
     c.setup_space_axes(ax, blocks, unit, extra=tails)
@@ -254,6 +276,8 @@ def plot_model(
             )
         if loads and any(p.support for p in mdl.loads.points):
             handles.append(Line2D([], [], color=c.SUPPORT_COLOR, lw=2, marker=">", label="support"))
+        if loads and mdl.loads.water_table:
+            handles.append(Line2D([], [], color=WATER_COLOR, lw=1.5, ls="--", label="water table"))
         if loads and (any(not p.support for p in mdl.loads.points) or mdl.loads.lines):
             handles.append(Line2D([], [], color=c.LOAD_COLOR, lw=2, marker=">", label="load"))
         ax.legend(handles=handles, loc="upper right", fontsize=7, framealpha=0.9)
