@@ -454,3 +454,17 @@ def test_version_answers_without_loading_the_engine():
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
     assert out.returncode == 0, out.stderr
     assert out.stdout.splitlines() == ["rockdem 0.1.0", "heavy: []"]
+
+
+def test_readme_model_file_runs(tmp_path):
+    """The complete small model in the README (with its water table) is valid
+    and stands: what a new user copies must work."""
+    import re
+    from pathlib import Path
+
+    readme = (Path(__file__).parents[1] / "README.md").read_text()
+    text = re.search(r"```yaml\n(# Two blocks on fixed ground.*?)```", readme, re.S).group(1)
+    (tmp_path / "stack.yaml").write_text(text)
+    r = invoke("run", str(tmp_path / "stack.yaml"))
+    assert r.exit_code == 0, r.output
+    assert "verdict: STABLE" in r.stdout
