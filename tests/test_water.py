@@ -148,3 +148,14 @@ def test_model_picture_draws_the_water_table():
     _, y = lines[0].get_data()
     assert y[0] == pytest.approx(0.0) and y[-1] == pytest.approx(H)  # toe, then the crest level
     assert "water table" in [t.get_text() for t in ax.get_legend().get_texts()]
+
+
+def test_water_above_a_free_face_is_refused():
+    """A table above the ground surface would press on free faces, which are
+    not loaded: refused, naming the block and the height, not a wrong answer."""
+    model, _ = _section(FULL)
+    high = rd.Loads(water_table=((-5.0, 4.0), (CRACK_X, H)), water_unit_weight=GAMMA_W)
+    from dataclasses import replace
+
+    with pytest.raises(rd.InputError, match=r"above the free surface of block 2"):
+        rd.build_system(replace(model, loads=high))

@@ -192,3 +192,48 @@ def _positive_part(g0, g1, L):
     s_bar = np.where(first, cross / 3, s_bar)
     s_bar = np.where(last, cross + 2 * (L - cross) / 3, s_bar)
     return total, np.nan_to_num(s_bar)
+
+
+#: samples per block edge when looking for free faces under the water table
+FREE_FACE_SAMPLES = 8
+
+
+def check_water_table(blocks: Blocks, faces, loads: Loads) -> None:
+    """Refuse a water table above the free surface of a free block.
+
+    Water acts on joints only; above ground (a pond, a flooded toe, a
+    seepage face drawn too high) it would press on free faces, which are
+    not loaded, and the joints' water would push the blocks out with
+    nothing against it: a silent wrong answer.  Free faces are the parts of
+    the free blocks' outlines that no interface covers.
+    """
+    if not loads.water_table:
+        return
+    start, end, block = blocks.edges()
+    free = ~blocks.fixed[block]
+    if not free.any():
+        return
+    start, end, block = start[free], end[free], block[free]
+    t = (np.arange(FREE_FACE_SAMPLES) + 0.5) / FREE_FACE_SAMPLES
+    pts = (start[:, None, :] + t[None, :, None] * (end - start)[:, None, :]).reshape(-1, 2)
+    owner = np.repeat(block, FREE_FACE_SAMPLES)
+    tol = blocks.tolerance
+    segments = shapely.linestrings(np.stack([faces.start, faces.end], axis=1))
+    covered = np.zeros(len(pts), dtype=bool)
+    if len(segments):
+        hit, _ = shapely.STRtree(segments).query(
+            shapely.points(pts), predicate="dwithin", distance=10 * tol
+        )
+        covered[hit] = True
+    depth = pore_pressure(loads, pts) / loads.water_unit_weight
+    wet = ~covered & (depth > 10 * tol)
+    if wet.any():
+        k = int(np.flatnonzero(wet)[np.argmax(depth[wet])])
+        x, y = pts[k]
+        raise InputError(
+            "loads water_table",
+            f"is {depth[k]:.3g} above the free surface of block {int(blocks.ids[owner[k]])} "
+            f"at ({x:.6g}, {y:.6g}); water on free faces is not modelled",
+            "keep the water table at or below the ground surface (it may meet the face, "
+            "as a seepage face), or model ponded water as line loads",
+        )
