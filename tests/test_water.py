@@ -134,6 +134,12 @@ def test_pore_pressure_in_the_result_files(tmp_path):
     u = np.array([float(r[key]) for r in rows])
     assert u.max() == pytest.approx(GAMMA_W * FULL, rel=0.2)  # deepest spring point
     assert u.min() == 0.0  # joints above the water table are dry
+    with open(tmp_path / "out" / "blocks.csv") as fh:
+        block = list(csv.DictReader(fh))[2]  # the sliding block
+    fx = float(next(v for k, v in block.items() if k.startswith("water_fx")))
+    psi = np.radians(PLANE)
+    U, V = 0.5 * GAMMA_W * FULL * CRACK_X / np.cos(psi), 0.5 * GAMMA_W * FULL**2
+    assert fx == pytest.approx(-U * np.sin(psi) - V, rel=1e-9)  # uplift and crack thrust
 
 
 def test_model_picture_draws_the_water_table():

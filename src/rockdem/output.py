@@ -45,7 +45,7 @@ from typing import Any
 import numpy as np
 
 from .errors import InputError
-from .loads import pore_pressure
+from .loads import pore_pressure, water_loads
 from .modes import MODES, boundary_contacts, failure_modes
 from .results import CURRENT_NAMES
 from .spring_law import STATE_NAMES
@@ -108,6 +108,7 @@ def analysis_tables(analysis, modes=None) -> dict[str, list[dict[str, Any]]]:
     b = system.blocks
     d, mech = analysis.displacement, analysis.mechanism
     mode = np.where(b.fixed, "fixed", (modes or failure_modes(analysis)).name)
+    water = water_loads(b, system.interfaces, system.model.loads)
     blocks = [
         {
             "id": int(b.ids[i]),
@@ -115,6 +116,8 @@ def analysis_tables(analysis, modes=None) -> dict[str, list[dict[str, Any]]]:
             "area": float(b.area[i]),
             "unit_weight": float(b.unit_weight[i]),
             "weight": float(b.weight[i]),
+            "water_fx": float(water[i, 0]),
+            "water_fy": float(water[i, 1]),
             "centroid_x": float(b.centroid[i, 0]),
             "centroid_y": float(b.centroid[i, 1]),
             "ux": float(d[i, 0]),
@@ -347,7 +350,8 @@ def check_output_dir(folder: str | Path, *, overwrite: bool = False) -> Path:
 COLUMN_QUANTITY = {
     **dict.fromkeys("area area_removed removed_area total_area_removed free_area".split(), "area"),
     **dict.fromkeys(
-        "weight normal_force shear_force support_force free_weight force".split(), "force"
+        "weight water_fx water_fy normal_force shear_force support_force free_weight force".split(),
+        "force",
     ),
     **dict.fromkeys(
         "normal_stress shear_stress sigma tau pore_pressure capacity strength_at_factor".split(),
@@ -404,7 +408,8 @@ def _csv_value(v: Any) -> Any:
 
 _COLUMNS = {
     "blocks": list(
-        "id fixed area unit_weight weight centroid_x centroid_y ux uy rotation unstable "
+        "id fixed area unit_weight weight water_fx water_fy centroid_x centroid_y ux uy "
+        "rotation unstable "
         "mechanism_x mechanism_y mechanism_rotation failure_mode".split()
     ),
     "interfaces": list(
