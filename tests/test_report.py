@@ -276,3 +276,17 @@ def test_report_in_headless_browser_cli(report, results, tmp_path):
     shot = tmp_path / "cli.png"
     _check_with_cli(report, shot, f"Factor of safety F = {fos.value:.3f}")
     assert shot.stat().st_size > 10_000
+
+
+def test_how_far_to_trust_this(report, results):
+    """The report states the bracket, how the failure is known (in words the
+    engineer can check) and the model's discretisation, in its own section."""
+    _, fos = results
+    html_text = report.read_text()
+    section = html_text.split('id="trust"', 1)[1].split("<h2", 1)[0]
+    lo, hi = fos.bracket
+    assert f"F = {lo:.4f}" in section and f"F = {hi:.4f}" in section
+    assert {"lp-certificate": "proven", "dynamic-relaxation": "confirmed"}.get(
+        fos.proof, "not settled"
+    ) in section
+    assert "spring points" in section

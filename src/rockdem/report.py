@@ -26,6 +26,7 @@ from .analysis import analyse, factor_of_safety
 from .model import Model
 from .modes import boundary_warnings, failure_modes
 from .results import Analysis, FactorOfSafety, format_factor
+from .trust import trust_statements
 from .units import UNKNOWN, Units, parse_units
 
 _CSS = """
@@ -578,11 +579,14 @@ def write_report(
         f"<h1>{_esc(title)}</h1>",
         f'<p class="meta">rockdem {_esc(__version__)} · {_esc(now)}</p>',
         '<nav><a href="#results">Verdict</a><a href="#tables">Failed joints</a>'
-        '<a href="#pictures">Pictures</a><a href="#progressive">Progressive failure</a>'
+        '<a href="#trust">Trust</a><a href="#pictures">Pictures</a>'
+        '<a href="#progressive">Progressive failure</a>'
         '<a href="#inputs">Inputs</a></nav>',
         '<h2 id="results">Verdict</h2>',
         _verdict(a, fos),
         _warnings(a, failed),
+        '<h3 id="trust">How far to trust this</h3>',
+        "<ul>" + "".join(f"<li>{_esc(t)}</li>" for t in trust_statements(a, fos)) + "</ul>",
         '<h2 id="tables">Failed joints and unstable blocks</h2>',
         f"<h3>Joints at {F1}: state now and failure history</h3>",
         f'<p class="states">{_esc(_state_counts(a))}.</p>',

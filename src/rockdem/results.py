@@ -303,9 +303,10 @@ class FactorOfSafety:
     @property
     def proof(self) -> str | None:
         """How the upper end of the bracket is known to fail: ``"lp-certificate"``
-        (proven: no admissible force field) or ``"undecided"`` (the solver
-        found no equilibrium there, nothing proves none exists: the factor
-        of safety may be higher); None without a failed trial."""
+        (proven: no admissible force field), ``"dynamic-relaxation"``
+        (confirmed by the second solver a little beyond it) or
+        ``"undecided"`` (nothing settles it: the factor of safety may be
+        higher); None without a failed trial."""
         if self.failed_analysis is None:
             return None
         return self.failed_analysis.evidence.proof

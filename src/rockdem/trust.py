@@ -1,0 +1,59 @@
+"""How far to trust a result: the statements an engineer checks before
+signing (the bracket, how the failure is known, the solver's evidence, the
+model's limits), in plain sentences for the report and the command line."""
+
+from __future__ import annotations
+
+from .results import Analysis, FactorOfSafety
+
+PROOF_TEXT = {
+    "lp-certificate": "proven: no statically admissible force field carries the loads "
+    "(equilibrium LP), whatever the solver",
+    "dynamic-relaxation": "confirmed, not proven: a second solver (dynamic relaxation) "
+    "leaves the blocks moving",
+    "undecided": "not settled: the solver found no equilibrium, an admissible force field "
+    "exists and the second solver did not confirm a mechanism; the factor may be higher",
+}
+
+
+def trust_statements(a: Analysis, fos: FactorOfSafety | None = None) -> list[str]:
+    """Sentences on the reliability of ``a`` (and of ``fos``), most important first."""
+    out = []
+    failed = fos.failed_analysis if fos is not None else (None if a.stable else a)
+    if fos is not None and fos.value is not None:
+        lo, hi = fos.bracket
+        out.append(
+            f"Factor of safety {fos.value:.4f}: equilibrium was found at F = {lo:.4f} and "
+            f"lost at F = {hi:.4f}; the value is the middle of that bracket "
+            f"(+-{(hi - lo) / 2:.4f})."
+        )
+        bound = fos.certified_upper_bound
+        if bound is not None:
+            out.append(f"Rigorous upper bound (equilibrium LP): F <= {bound:.4f}.")
+    elif fos is not None:
+        out.append(f"No factor of safety ({fos.mode}); bracket {fos.bracket}.")
+    if failed is not None:
+        ev = failed.evidence
+        proof = ev.proof or "undecided"
+        out.append(f"The failure is {PROOF_TEXT[proof]}.")
+        if ev.relaxation:
+            out.append(f"Second solver, {ev.relaxation}.")
+        if ev.certificate:
+            out.append(f"{ev.certificate[0].upper()}{ev.certificate[1:]}.")
+        out.append(
+            f"Newton: {ev.reason} after {ev.iterations} iterations "
+            f"(last out-of-balance {ev.residuals[-1]:.1e} of the loads)."
+            if ev.residuals
+            else f"Newton: {ev.reason}."
+        )
+    settings = a.system.model.settings
+    out.append(
+        f"Each joint is represented by {settings.points_per_interface} spring points "
+        f"({settings.quadrature} rule); stresses between them are interpolated."
+    )
+    if a.system.model.loads.water_table:
+        out.append(
+            "Water acts on joints below the water table (hydrostatic, on both faces); free "
+            "faces are dry and no seepage is computed."
+        )
+    return out
