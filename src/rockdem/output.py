@@ -49,6 +49,7 @@ from .loads import pore_pressure, water_loads
 from .modes import MODES, boundary_contacts, failure_modes
 from .results import CURRENT_NAMES
 from .spring_law import STATE_NAMES
+from .trust import trust_statements
 
 #: The files :func:`write_results` writes.
 RESULT_FILES = ("blocks.csv", "interfaces.csv", "springs.csv", "result.json")
@@ -298,7 +299,7 @@ def fos_summary(fos) -> dict[str, Any]:
     ``failure_modes``, ``boundary_contacts`` and ``warnings``
     (:func:`mechanism_summary`).
     """
-    failed = fos.failed_analysis
+    failed, base = fos.failed_analysis, fos.stable_analysis
     return jsonable(
         {
             "factor_of_safety": fos.value,
@@ -306,6 +307,8 @@ def fos_summary(fos) -> dict[str, Any]:
             "mode": fos.mode,
             "proof": fos.proof,
             "certified_upper_bound": fos.certified_upper_bound,
+            "relaxation": None if failed is None else failed.evidence.relaxation,
+            "trust": [] if base is None else trust_statements(base, fos),
             "definition": fos.definition,
             "mechanism_blocks": [] if failed is None else [int(i) for i in failed.unstable_blocks],
             "mechanism_factor": None if failed is None else failed.strength_factor,

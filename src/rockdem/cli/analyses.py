@@ -99,7 +99,7 @@ _PROOF = {
     "lp-certificate": "proven: no statically admissible force field carries the loads "
     "(equilibrium LP)",
     "dynamic-relaxation": "confirmed by a second method: dynamic relaxation from the last "
-    "equilibrium leaves the blocks moving (not a proof; an admissible force field exists)",
+    "equilibrium leaves the blocks moving (a confirmation, not a proof)",
     "undecided": "[yellow]undecided[/yellow]: the solver found no equilibrium, but an "
     "admissible force field exists; failure is not proven (the factor may be higher)",
     None: "none needed (equilibrium found)",
@@ -253,6 +253,8 @@ def _print_fos(doc: dict[str, Any]) -> None:
         out.print(f"factor of safety: [bold]{doc['factor_of_safety']:.4f}[/bold]")
         out.print(f"bracket: stable at {lo:.4f}, unstable at {hi:.4f} ({n} trials)")
         out.print(f"unstable end: {_PROOF[doc['proof']]}")
+        if doc["proof"] == "dynamic-relaxation" and doc.get("relaxation"):
+            out.print(f"  ({escape(doc['relaxation'])})")
         if doc.get("certified_upper_bound") is not None:
             out.print(f"rigorous upper bound (equilibrium LP): {doc['certified_upper_bound']:.4f}")
     elif doc["mode"] == "no-failure":
