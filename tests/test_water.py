@@ -20,10 +20,12 @@ FULL = H - CRACK_X * np.tan(np.radians(PLANE))  # depth of the crack, 3.07 m
 GAMMA, GAMMA_W, PHI, C = 26.0, 9.81, 35.0, 10.0  # kN/m^3, kN/m^3, degrees, kPa
 
 
-def _section(z_w: float):
+def _section(z_w: float, alpha: float = 0.0, shift=(0.0, 0.0)):
     """Sliding block between the face, the plane and a vertical crack at
     x = CRACK_X; fixed rock below the plane and behind the crack; the water
-    table from z_w above the crack's foot straight down to the toe."""
+    table from z_w above the crack's foot straight down to the toe.  The
+    block slides toward -x: a seismic coefficient ``alpha`` out of the face
+    is ``seismic_h = -alpha``.  ``shift`` moves the section and its water."""
     t = np.tan(np.radians(PLANE))
     crest = H / np.tan(np.radians(FACE))
     foot = (CRACK_X, CRACK_X * t)
@@ -31,32 +33,47 @@ def _section(z_w: float):
     out = (H / t, H)  # where the plane reaches the upper surface
     behind = [foot, out, (CRACK_X, H)]
     ground = [(-20.0, -20.0 * t), out, (40.0, H), (40.0, -30.0), (-20.0, -30.0)]
+    dx, dy = shift
     blocks = rd.Blocks.from_polygons(
-        [ground, behind, block], fixed=[True, True, False], unit_weight=GAMMA
+        [np.asarray(p) + np.array([dx, dy]) for p in (ground, behind, block)],
+        fixed=[True, True, False],
+        unit_weight=GAMMA,
     )
-    table = ((0.0, 0.0), (CRACK_X, foot[1] + z_w)) if z_w > 0 else ()
-    loads = rd.Loads(water_table=table, water_unit_weight=GAMMA_W)
+    table = ((dx, dy), (CRACK_X + dx, foot[1] + z_w + dy)) if z_w > 0 else ()
+    loads = rd.Loads(water_table=table, water_unit_weight=GAMMA_W, seismic_h=-alpha)
     # ductile: cohesion kept after yield, as limit equilibrium assumes
     joint = rd.Joint(normal_stiffness=1e6, friction_angle=PHI, cohesion=C).ductile
     return rd.Model(blocks, joint, loads=loads), blocks
 
 
-def _hoek_bray(z_w: float, weight: float) -> float:
+def _hoek_bray(z_w: float, weight: float, alpha: float = 0.0) -> float:
+    """Hoek & Bray (1981) eq. for plane failure with a tension crack, water and
+    a horizontal seismic coefficient alpha out of the face."""
     psi = np.radians(PLANE)
     A = CRACK_X / np.cos(psi)
     U = 0.5 * GAMMA_W * z_w * A
     V = 0.5 * GAMMA_W * z_w**2
-    resisting = C * A + (weight * np.cos(psi) - U - V * np.sin(psi)) * np.tan(np.radians(PHI))
-    return resisting / (weight * np.sin(psi) + V * np.cos(psi))
+    normal = weight * (np.cos(psi) - alpha * np.sin(psi)) - U - V * np.sin(psi)
+    resisting = C * A + normal * np.tan(np.radians(PHI))
+    return resisting / (weight * (np.sin(psi) + alpha * np.cos(psi)) + V * np.cos(psi))
 
 
+@pytest.mark.parametrize("alpha", [0.0, 0.1])
 @pytest.mark.parametrize("z_w", [0.0, 0.5 * FULL, FULL])
-def test_plane_failure_with_a_water_filled_tension_crack(z_w):
-    """FS within 0.5% of Hoek & Bray for a dry, half-filled and full crack."""
-    model, blocks = _section(z_w)
-    exact = _hoek_bray(z_w, float(blocks.weight[2]))
+def test_plane_failure_with_a_water_filled_tension_crack(z_w, alpha):
+    """FS within 0.5% of Hoek & Bray for a dry, half-filled and full crack,
+    without and with a seismic coefficient of 0.1 (six combinations)."""
+    model, blocks = _section(z_w, alpha)
+    exact = _hoek_bray(z_w, float(blocks.weight[2]), alpha)
     fos = rd.factor_of_safety(model, width=0.002)
     assert fos.value == pytest.approx(exact, rel=0.005)
+
+
+def test_raising_the_section_and_its_water_together_changes_nothing():
+    """The same slope and water table 100 m higher and 50 m to the right."""
+    here = rd.factor_of_safety(_section(FULL)[0], width=0.002).value
+    there = rd.factor_of_safety(_section(FULL, shift=(50.0, 100.0))[0], width=0.002).value
+    assert there == pytest.approx(here, rel=1e-6)
 
 
 def test_water_lowers_the_factor_and_is_not_reduced_by_strength_reduction():
