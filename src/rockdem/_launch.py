@@ -11,7 +11,7 @@ def main() -> None:
     if sys.argv[1:] == ["--version"]:
         from . import __version__
 
-        print(f"rockdem {__version__}")
+        sys.stdout.write(f"rockdem {__version__}\n")
         return
     from .cli import main as cli_main
 

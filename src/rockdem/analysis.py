@@ -15,11 +15,10 @@ from collections.abc import Callable
 from dataclasses import replace
 
 import numpy as np
-from scipy.sparse import coo_array
-from scipy.sparse.csgraph import connected_components
 
 from .certificate import certificate_for, prove_failed_trial, prove_in_region, with_certificate
-from .linalg import factorize, norm
+from .linalg import norm
+from .mechanism import held_blocks, newton_mechanism, relaxation_mechanism, slip_surface
 from .model import Model
 from .relaxation import confirm_failed_analysis, confirm_failed_trial
 from .results import Analysis, Evidence, FactorOfSafety, Step, Trial, tabulate
@@ -30,12 +29,6 @@ log = logging.getLogger(__name__)
 
 #: cascade limit: re-solves at one load level after strength was lost
 MAX_CASCADE = 100
-#: a block moves in the mechanism if its motion exceeds this share of the largest
-MECHANISM_SHARE = 0.01
-#: ... in the late motion of dynamic relaxation (the settling blocks still creep)
-RELAXATION_SHARE = 0.05
-#: a spring point holds when its strength exceeds its shear stress by this factor
-HOLD_MARGIN = 1.01
 #: a failed load step is retried in up to this many equal sub-steps (halving)
 MAX_SUBSTEPS = 8
 
@@ -150,92 +143,6 @@ def _load_step(system, state, q, lam_prev, lam, factor, stage):
     return sol, state, q, lam_prev, cert
 
 
-def _mechanism(system: System, sol: Solve, state, load_factor, factor):
-    """Direction of the failure mechanism: the lightly shifted Newton step.
-
-    Where the tangent is (nearly) singular the step is dominated by the
-    free motion; elsewhere it is elastic and orders of magnitude smaller.
-    """
-    asm = system.assembly
-    n_blocks = system.blocks.n_blocks
-    out = np.zeros((n_blocks, 3))
-    if asm.n_dof == 0:
-        return out, np.zeros(n_blocks, dtype=bool)
-    resp, r = residual(system, sol.q, state, load_factor, factor)
-    J = asm.stiffness(resp.d_nn, resp.d_sn, resp.d_ss, 1e-6, system.K0)
-    try:
-        d = factorize(J).solve(r)
-    except RuntimeError:
-        d = sol.direction
-    if np.dot(d, system.f_ext) < 0:  # the loads do positive work on the mechanism
-        d = -d
-    free = ~system.blocks.fixed
-    out[free] = d[asm.dof[free]]
-    size = np.sqrt(np.abs(system.blocks.area))
-    motion = np.hypot(out[:, 0], out[:, 1]) + np.abs(out[:, 2]) * size
-    top = motion.max()
-    if top <= 0 or not np.isfinite(top):
-        return out, np.zeros(n_blocks, dtype=bool)
-    return out / top, motion > MECHANISM_SHARE * top
-
-
-def _slip_surface(system: System, unstable: np.ndarray, if_res) -> np.ndarray:
-    """Interfaces of the slip surface: failed or separating ones at moving blocks."""
-    faces = system.interfaces
-    moving = unstable[faces.block_a] | unstable[faces.block_b]
-    separating = unstable[faces.block_a] != unstable[faces.block_b]
-    return np.flatnonzero(moving & ((if_res.state > 0) | separating))
-
-
-def _relaxation_mechanism(system: System, failed: Analysis, run) -> Analysis:
-    """The mechanism as dynamic relaxation shows it, where it found one.
-
-    Beyond the limit the blocks of the mechanism keep moving while the rest
-    settle: the late motion of the run (its last quarter) is the failure
-    mechanism as UDEC draws it (velocities), computed from one state
-    (the last equilibrium) at one factor, so it does not depend on the
-    trial schedule or on where a Newton solve stopped.
-    """
-    if run is None or run.status != "mechanism" or run.late is None:
-        return failed
-    asm = system.assembly
-    late = run.late if np.dot(run.late, system.f_ext) >= 0 else -run.late
-    mech = np.zeros((system.blocks.n_blocks, 3))
-    free = ~system.blocks.fixed
-    mech[free] = late[asm.dof[free]]
-    size = np.sqrt(np.abs(system.blocks.area))
-    motion = np.hypot(mech[:, 0], mech[:, 1]) + np.abs(mech[:, 2]) * size
-    top = motion.max()
-    if not 0 < top < np.inf:
-        return failed
-    unstable = motion > RELAXATION_SHARE * top
-    mech = np.where(unstable[:, None], mech / top, 0.0)
-    slip = _slip_surface(system, unstable, failed.interfaces)
-    return replace(failed, mechanism=mech, unstable=unstable, slip_surface=slip)
-
-
-def _held(system: System, resp) -> np.ndarray:
-    """Blocks joined to the fixed ground through holding interfaces.
-
-    An interface holds when at least two of its spring points are closed and
-    sticking with a margin (two points restrain all three relative motions;
-    one point is a hinge).  Blocks that no chain of holding interfaces ties
-    to the ground are free to move: the candidates of the mechanism.
-    """
-    faces, springs = system.interfaces, system.springs
-    m = springs.points_per_interface
-    margin = resp.capacity > HOLD_MARGIN * np.abs(resp.tau)
-    sticking = (~resp.open & ~resp.sliding & margin).reshape(-1, m)
-    holds = sticking.sum(axis=1) >= min(2, m)
-    n = system.blocks.n_blocks
-    ground = n  # all fixed blocks are one node
-    a = np.where(system.blocks.fixed[faces.block_a], ground, faces.block_a)[holds]
-    b = np.where(system.blocks.fixed[faces.block_b], ground, faces.block_b)[holds]
-    graph = coo_array((np.ones(len(a)), (a, b)), shape=(n + 1, n + 1))
-    _, label = connected_components(graph, directed=False)
-    return (label[:n] == label[ground]) | system.blocks.fixed
-
-
 def _package(
     system, sol, state, load_factor, factor, stable, steps, q_ok, near_limit=False, drive=None
 ):
@@ -259,10 +166,10 @@ def _package(
         resp = sol.response
         lam_fail = steps[-1].load_factor if steps else load_factor
         drive = factor if drive is None else drive
-        mech, unstable = _mechanism(system, sol, state, lam_fail, drive)
+        mech, unstable = newton_mechanism(system, sol, state, lam_fail, drive)
         if near_limit and sol.reached_q is not None:
             resp_limit, _ = residual(system, sol.reached_q, state, lam_fail, sol.reached)
-            free = unstable & ~_held(system, resp_limit)
+            free = unstable & ~held_blocks(system, resp_limit)
             if free.any():
                 unstable = free
                 mech[~unstable] = 0.0
@@ -271,7 +178,7 @@ def _package(
         stage = steps[-1].stage if steps else 0
         state = commit(system.springs, state, resp, ds, stage)
     sp_res, if_res = tabulate(system, state, resp, factor, system.model.settings.reduce_tensile)
-    slip = np.zeros(0, dtype=np.int64) if stable else _slip_surface(system, unstable, if_res)
+    slip = np.zeros(0, dtype=np.int64) if stable else slip_surface(system, unstable, if_res)
     return Analysis(
         system,
         bool(stable),
@@ -347,7 +254,7 @@ def analyse(
             failed = _package(system, sol, state, lam_prev, strength_factor, False, steps, q)
             failed = prove_in_region(system, failed, state, strength_factor)
             failed, run = confirm_failed_analysis(system, failed, state, q, lam)
-            return _relaxation_mechanism(system, failed, run)
+            return relaxation_mechanism(system, failed, run)
     return _package(system, sol, state, lam_prev, strength_factor, True, steps, q)
 
 
@@ -489,7 +396,7 @@ def factor_of_safety(
     if hi_an is not None and hi_an.evidence.certified is None:
         hi_an, trials = prove_failed_trial(system, hi_an, lo_an.state, hi, trials)
         hi_an, trials, run = confirm_failed_trial(system, hi_an, lo_an, hi, trials)
-        hi_an = _relaxation_mechanism(system, hi_an, run)
+        hi_an = relaxation_mechanism(system, hi_an, run)
     return FactorOfSafety(
         0.5 * (lo + hi), (lo, hi), "strength", tuple(trials), lo_an, hi_an, _DEFINITION
     )
