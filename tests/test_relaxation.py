@@ -1,6 +1,8 @@
 """Dynamic relaxation, the second solver: it must find equilibrium where one
 exists and keep the blocks moving where none does, on closed-form cases."""
 
+from itertools import pairwise
+
 import numpy as np
 import pytest
 
@@ -113,3 +115,26 @@ def test_the_failed_state_is_that_of_the_limit_not_of_the_trial():
     assert fos.failed_analysis.strength_factor == pytest.approx(hi, rel=1e-12)
     assert hi - lo <= 0.005
     assert all(t.factor > hi for t in fos.trials if not t.stable)  # the trials went further
+
+
+def test_slip_surface_as_ordered_polylines():
+    """Issue 10: the slip surface of the paper's 6.2 slope as polylines whose
+    consecutive points are the ends of one slip interface each, covering
+    every slip interface once, with stresses per segment (result JSON)."""
+    from rockdem.config import load_model
+    from rockdem.examples import example_path
+    from rockdem.output import analysis_summary
+
+    a = rd.analyse(load_model(example_path("inclined-layers"))[0])
+    lines = analysis_summary(a)["slip_polylines"]
+    faces = a.system.interfaces
+    seen = []
+    for line in lines:
+        pts = np.asarray(line["points"])
+        assert len(pts) == len(line["interfaces"]) + 1
+        assert len(line["normal_stress"]) == len(line["interfaces"]) == len(line["mobilised"])
+        for (p, q), i in zip(pairwise(pts), line["interfaces"], strict=True):
+            ends = {tuple(np.round(faces.start[i], 6)), tuple(np.round(faces.end[i], 6))}
+            assert {tuple(np.round(p, 6)), tuple(np.round(q, 6))} == ends
+        seen += line["interfaces"]
+    assert sorted(seen) == sorted(int(i) for i in a.slip_surface)

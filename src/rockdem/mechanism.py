@@ -111,3 +111,61 @@ def held_blocks(system: System, resp) -> np.ndarray:
     graph = coo_array((np.ones(len(a)), (a, b)), shape=(n + 1, n + 1))
     _, label = connected_components(graph, directed=False)
     return (label[:n] == label[ground]) | system.blocks.fixed
+
+
+def slip_polylines(analysis: Analysis) -> list[dict]:
+    """The slip surface as ordered polylines, each segment with its stresses.
+
+    The slip interfaces are chained end to end (endpoints within ten times the
+    geometric tolerance are one node), walking from a loose end where there
+    is one; a branch starts a new polyline.  Per segment: the interface, the
+    mean normal and shear stress and the mobilised share of the strength
+    (|tau| / strength at the factor of the stresses).
+    """
+    faces, idx = analysis.system.interfaces, np.asarray(analysis.slip_surface)
+    if not len(idx):
+        return []
+    tol = 10 * analysis.system.blocks.tolerance
+    ends = np.vstack([faces.start[idx], faces.end[idx]])
+    _, node = np.unique(np.round(ends / tol).astype(np.int64), axis=0, return_inverse=True)
+    node = node.ravel()
+    k = len(idx)
+    seg_nodes = np.column_stack([node[:k], node[k:]])
+    xy = np.zeros((node.max() + 1, 2))
+    xy[node] = ends
+    touching: dict[int, list[int]] = {}
+    for s, (p, q) in enumerate(seg_nodes):
+        touching.setdefault(int(p), []).append(s)
+        touching.setdefault(int(q), []).append(s)
+    springs, m = analysis.springs, analysis.system.springs.points_per_interface
+    strength = springs.strength if springs.strength is not None else springs.capacity
+    point_strength = np.asarray(strength).reshape(-1, m).mean(axis=1)
+    sigma, tau = analysis.interfaces.normal_stress, analysis.interfaces.shear_stress
+    used = np.zeros(k, dtype=bool)
+    lines = []
+    while not used.all():
+        loose = [n for n, segs in touching.items() if sum(not used[s] for s in segs) == 1]
+        here = loose[0] if loose else int(seg_nodes[np.flatnonzero(~used)[0], 0])
+        points, segs = [here], []
+        while True:
+            nxt = [s for s in touching[here] if not used[s]]
+            if not nxt:
+                break
+            s = nxt[0]
+            used[s] = True
+            here = int(seg_nodes[s, 1] if seg_nodes[s, 0] == here else seg_nodes[s, 0])
+            points.append(here)
+            segs.append(int(idx[s]))
+        segs_arr = np.asarray(segs)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            mobilised = np.abs(tau[segs_arr]) / point_strength[segs_arr]
+        lines.append(
+            {
+                "points": xy[points].tolist(),
+                "interfaces": segs,
+                "normal_stress": sigma[segs_arr].tolist(),
+                "shear_stress": tau[segs_arr].tolist(),
+                "mobilised": [float(v) if np.isfinite(v) else None for v in mobilised],
+            }
+        )
+    return lines

@@ -46,6 +46,7 @@ import numpy as np
 
 from .errors import InputError
 from .loads import pore_pressure, water_loads
+from .mechanism import slip_polylines
 from .modes import MODES, boundary_contacts, failure_modes
 from .results import CURRENT_NAMES
 from .spring_law import STATE_NAMES
@@ -225,10 +226,12 @@ def state_counts(analysis) -> dict[str, dict[str, int]]:
 
 def mechanism_summary(analysis) -> dict[str, Any]:
     """What the mechanism does: ``failure_modes`` (ids of the moving blocks by
-    mode), ``boundary_contacts`` (where it touches a fixed side of the model)
-    and ``warnings`` (one sentence each); all empty for a stable analysis."""
+    mode), ``boundary_contacts`` (where it touches a fixed side of the model),
+    ``warnings`` (one sentence each) and ``slip_polylines`` (the slip surface
+    as ordered polylines with the stresses of each segment); all empty for a
+    stable analysis."""
     if analysis is None or analysis.stable:
-        return {"failure_modes": {}, "boundary_contacts": [], "warnings": []}
+        return {"failure_modes": {}, "boundary_contacts": [], "warnings": [], "slip_polylines": []}
     modes = failure_modes(analysis)
     by_mode = {m: [int(i) for i in modes.blocks(m)] for m in MODES if m != "stable"}
     contacts = boundary_contacts(analysis)
@@ -245,6 +248,7 @@ def mechanism_summary(analysis) -> dict[str, Any]:
             for c in contacts
         ],
         "warnings": [c.message for c in contacts],
+        "slip_polylines": slip_polylines(analysis),
     }
 
 
