@@ -13,6 +13,7 @@ import pytest
 from typer.testing import CliRunner
 
 import rockdem
+from _models import BOX
 from rockdem.cli import EXIT_FAILED, EXIT_INPUT, app
 from rockdem.config import json_schema
 from rockdem.output import RESULT_FILES
@@ -22,15 +23,6 @@ runner = CliRunner()
 BROKEN = Path(__file__).parent / "broken_models"
 WEDGE_FOS = wedge_fos(200, 75, 37, 27, 35, 30, 35)
 
-BOX = """units: kN, m, kPa
-materials: {rock: {unit_weight: 25}}
-joints:
-  bedding: {normal_stiffness: 1.0e+6, friction_angle: 30}
-blocks:
-  - {fixed: true, vertices: [[-5, -1], [5, -1], [5, 0], [-5, 0]]}
-  - {material: rock, vertices: [[0, 0], [2, 0], [2, 1], [0, 1]]}
-  - {material: rock, vertices: [[0, 1], [2, 1], [2, 2], [0, 2]]}
-"""
 
 
 def invoke(*args: str):

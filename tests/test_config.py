@@ -12,6 +12,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import rockdem as rd
+from _models import SLOPE
 from rockdem.config import (
     AnalysisSpec,
     JointSpec,
@@ -319,21 +320,6 @@ def test_any_value_either_builds_or_gives_a_keyed_error(value, key):
 
 
 # ------------------------------------------------------- generated slopes
-SLOPE = """
-units: kN, m, kPa
-materials: {rock: {unit_weight: 25}}
-joints:
-  bedding: {normal_stiffness: 1.0e+6, friction_angle: 35}
-  cross: {normal_stiffness: 1.0e+6, friction_angle: 35}
-  base: {normal_stiffness: 1.0e+6, friction_angle: 45}
-ground_joint: base
-slope:
-  profile: {height: 6, face_angle: 60}
-  depth: 3
-  joint_sets:
-    bedding: {dip: 0, spacing: 2, origin: [0, 1]}
-    cross: {dip: 90, spacing: 3, origin: [0.5, 0]}
-"""
 
 
 def _slope(text: str):

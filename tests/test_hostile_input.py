@@ -26,6 +26,7 @@ import numpy as np
 import pytest
 
 import rockdem as rd
+from _models import BOX, SLOPE
 from rockdem.config import ModelFileError, parse_model
 from rockdem.config.parse import MAX_DEPTH, MAX_FILE_BYTES, MAX_NODES
 from rockdem.geometry import JointSet, Profile, estimate_size, generate_slope, section_polygon
@@ -33,15 +34,6 @@ from rockdem.geometry import JointSet, Profile, estimate_size, generate_slope, s
 TIME_LIMIT = 60  # seconds: a hang fails the test (each case takes 1-3 s)
 MEMORY_LIMIT = 1536 * 2**20  # bytes of address space for the child
 
-BOX = """units: kN, m, kPa
-materials: {rock: {unit_weight: 25}}
-joints:
-  bedding: {normal_stiffness: 1.0e+6, friction_angle: 30}
-blocks:
-  - {fixed: true, vertices: [[-5, -1], [5, -1], [5, 0], [-5, 0]]}
-  - {material: rock, vertices: [[0, 0], [2, 0], [2, 1], [0, 1]]}
-  - {material: rock, vertices: [[0, 1], [2, 1], [2, 2], [0, 2]]}
-"""
 
 BOX_TOML = """units = "kN, m, kPa"
 [materials.rock]
@@ -55,21 +47,6 @@ vertices = [[-5, -1], [5, -1], [5, 0], [-5, 0]]
 [[blocks]]
 material = "rock"
 vertices = [[0, 0], [2, 0], [2, 1], [0, 1]]
-"""
-
-SLOPE = """units: kN, m, kPa
-materials: {rock: {unit_weight: 25}}
-joints:
-  bedding: {normal_stiffness: 1.0e+6, friction_angle: 35}
-  cross: {normal_stiffness: 1.0e+6, friction_angle: 35}
-  base: {normal_stiffness: 1.0e+6, friction_angle: 45}
-ground_joint: base
-slope:
-  profile: {height: 6, face_angle: 60}
-  depth: 3
-  joint_sets:
-    bedding: {dip: 0, spacing: 2, origin: [0, 1]}
-    cross: {dip: 90, spacing: 3, origin: [0.5, 0]}
 """
 
 
