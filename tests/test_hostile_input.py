@@ -107,7 +107,7 @@ def inproc(*args, cwd: Path, limit: float = 10.0) -> _Run:
     return _Run(r.exit_code, r.stdout, r.stderr, elapsed)
 
 
-def refused(r, *fragments: str) -> str:
+def assert_refused(r, *fragments: str) -> str:
     """Exit 2 with one line on stderr holding every fragment; the line."""
     assert r.returncode == 2, (r.returncode, r.stdout, r.stderr)
     lines = r.stderr.strip().splitlines()
@@ -130,28 +130,28 @@ def check(tmp_path: Path, text: str, name: str = "m.yaml", *extra, child: bool =
 @pytest.mark.skipif(not hasattr(os, "mkfifo"), reason="no named pipes here")
 def test_a_named_pipe_is_refused_not_waited_on(tmp_path):
     os.mkfifo(tmp_path / "pipe.yaml")
-    refused(rockdem("check", "pipe.yaml", cwd=tmp_path, timeout=20), "not a regular file")
+    assert_refused(rockdem("check", "pipe.yaml", cwd=tmp_path, timeout=20), "not a regular file")
 
 
 @pytest.mark.skipif(not os.path.exists("/dev/zero"), reason="no /dev/zero")
 def test_a_device_is_refused_not_read(tmp_path):
-    refused(rockdem("check", "/dev/zero", cwd=tmp_path, timeout=20), "not a regular file")
+    assert_refused(rockdem("check", "/dev/zero", cwd=tmp_path, timeout=20), "not a regular file")
 
 
 def test_a_folder_is_refused(tmp_path):
     (tmp_path / "model.yaml").mkdir()
-    refused(rockdem("check", "model.yaml", cwd=tmp_path), "model.yaml: is a folder")
+    assert_refused(rockdem("check", "model.yaml", cwd=tmp_path), "model.yaml: is a folder")
 
 
 def test_a_file_over_the_size_limit_is_refused_unread(tmp_path):
     with open(tmp_path / "big.yaml", "wb") as fh:
         fh.truncate(MAX_FILE_BYTES + 1)  # sparse: costs no disk
-    refused(rockdem("check", "big.yaml", cwd=tmp_path), "larger than 32 MiB")
+    assert_refused(rockdem("check", "big.yaml", cwd=tmp_path), "larger than 32 MiB")
 
 
 def test_text_that_is_not_utf8_is_refused(tmp_path):
     (tmp_path / "m.yaml").write_bytes(BOX.replace("kPa", "kPa \xe9").encode("latin-1"))
-    refused(rockdem("check", "m.yaml", cwd=tmp_path), "is not UTF-8 text")
+    assert_refused(rockdem("check", "m.yaml", cwd=tmp_path), "is not UTF-8 text")
 
 
 @pytest.mark.parametrize("name,text", [("m.toml", BOX_TOML), ("m.yaml", BOX)])
@@ -167,13 +167,13 @@ def test_an_alias_bomb_ends_at_once(tmp_path):
     lines = ["a0: &a0 [x, x, x, x, x, x, x, x, x]"]
     lines += [f"a{i}: &a{i} [{', '.join([f'*a{i - 1}'] * 9)}]" for i in range(1, 10)]
     r = check(tmp_path, BOX + "\n".join(lines) + "\n", child=True)
-    refused(r, f"more than {MAX_NODES:,} values once its aliases are expanded")
+    assert_refused(r, f"more than {MAX_NODES:,} values once its aliases are expanded")
     assert r.elapsed < 15
 
 
 def test_an_alias_inside_its_own_anchor_is_refused(tmp_path):
     r = check(tmp_path, BOX + "description: &d [1, *d]\n", child=True)
-    refused(r, "alias *d refers to the node")
+    assert_refused(r, "alias *d refers to the node")
 
 
 def test_aliases_within_the_bounds_share_properties(tmp_path):
@@ -195,7 +195,7 @@ def test_aliases_within_the_bounds_share_properties(tmp_path):
     ],
 )
 def test_deep_nesting_is_refused_without_recursion(tmp_path, name, text):
-    refused(check(tmp_path, text, name, child=True), f"more than {MAX_DEPTH} deep")
+    assert_refused(check(tmp_path, text, name, child=True), f"more than {MAX_DEPTH} deep")
 
 
 # -------------------------------------------------------------- numbers
@@ -212,14 +212,14 @@ def test_deep_nesting_is_refused_without_recursion(tmp_path, name, text):
 )
 def test_numbers_are_read_as_the_format_writes_them(tmp_path, value, fragment):
     text = BOX.replace("friction_angle: 30", f"friction_angle: {value}")
-    refused(check(tmp_path, text), "joints.bedding.friction_angle", fragment)
+    assert_refused(check(tmp_path, text), "joints.bedding.friction_angle", fragment)
 
 
 def test_toml_underscores_are_toml_numbers_but_quoted_ones_are_not(tmp_path):
     ok = check(tmp_path, BOX_TOML.replace("friction_angle = 30", "friction_angle = 2_5"), "a.toml")
     assert ok.returncode == 0, ok.stderr
     r = check(tmp_path, BOX_TOML.replace("friction_angle = 30", 'friction_angle = "2_5"'), "b.toml")
-    refused(r, "joints.bedding.friction_angle", "expected a number")
+    assert_refused(r, "joints.bedding.friction_angle", "expected a number")
 
 
 def test_json_exponents_are_numbers(tmp_path):
@@ -284,7 +284,7 @@ def test_json_exponents_are_numbers(tmp_path):
 )
 def test_values_out_of_their_range_name_the_key_and_the_range(tmp_path, old, new, key, fragment):
     assert old in BOX
-    refused(check(tmp_path, BOX.replace(old, new, 1)), key, "out of range", fragment)
+    assert_refused(check(tmp_path, BOX.replace(old, new, 1)), key, "out of range", fragment)
 
 
 @pytest.mark.parametrize(
@@ -293,17 +293,17 @@ def test_values_out_of_their_range_name_the_key_and_the_range(tmp_path, old, new
 )
 def test_strength_reduction_settings_that_allow_endless_trials(tmp_path, settings):
     text = BOX.replace("units: kN, m, kPa", f"analysis: {{strength_reduction: {settings}}}")
-    refused(check(tmp_path, text), "analysis.strength_reduction", "trials, more than 100")
+    assert_refused(check(tmp_path, text), "analysis.strength_reduction", "trials, more than 100")
 
 
 def test_a_negative_seed_is_an_input_error(tmp_path):
     r = check(tmp_path, SLOPE.replace("  depth: 3", "  depth: 3\n  seed: -1"))
-    refused(r, "slope.seed", "out of range", ">= 0")
+    assert_refused(r, "slope.seed", "out of range", ">= 0")
 
 
 def test_a_spacing_of_1e_minus_300_names_the_key_and_range(tmp_path):
     r = check(tmp_path, SLOPE.replace("spacing: 2,", "spacing: 1.0e-300,"))
-    refused(r, "slope.joint_sets.bedding.spacing", ">= 1e-06 and <= 1e+09")
+    assert_refused(r, "slope.joint_sets.bedding.spacing", ">= 1e-06 and <= 1e+09")
 
 
 # ------------------------------------------------------ size before build
@@ -325,7 +325,7 @@ def test_a_slope_too_large_to_build_is_refused_with_its_estimate(tmp_path, old, 
     if "gap" in new:
         text = text.replace("  depth: 3", "  depth: 3\n  bridge_joint: base")
     r = check(tmp_path, text, child=True)
-    line = refused(
+    line = assert_refused(
         r, key, "would cut the section", "more than the limit of 100,000 blocks", "--max-blocks"
     )
     assert "about" in line and "of memory" in line
@@ -334,9 +334,9 @@ def test_a_slope_too_large_to_build_is_refused_with_its_estimate(tmp_path, old, 
 
 def test_the_block_limit_is_a_flag(tmp_path):
     r = check(tmp_path, SLOPE, "m.yaml", "--max-blocks", "3")
-    refused(r, "slope.joint_sets", "more than the limit of 3 blocks")
+    assert_refused(r, "slope.joint_sets", "more than the limit of 3 blocks")
     r = check(tmp_path, BOX, "b.yaml", "--max-blocks", "2")
-    refused(r, "blocks", "3 blocks are more than the limit of 2")
+    assert_refused(r, "blocks", "3 blocks are more than the limit of 2")
     assert check(tmp_path, SLOPE, "m.yaml", "--max-blocks", "1000").returncode == 0
 
 
@@ -380,7 +380,7 @@ STAB = (
 
 
 def test_check_refuses_a_trial_naming_an_unknown_block(tmp_path):
-    refused(
+    assert_refused(
         check(tmp_path, STAB), "stabilisation.trials[0].remove", "block 42", "no block has this id"
     )
 
@@ -414,16 +414,16 @@ def test_check_refuses_a_trial_naming_an_unknown_block(tmp_path):
     ],
 )
 def test_check_refuses_stabilisation_designs_that_stabilise_would(tmp_path, section, key, fragment):
-    refused(check(tmp_path, BOX + "stabilisation:\n" + section + "\n"), key, fragment)
+    assert_refused(check(tmp_path, BOX + "stabilisation:\n" + section + "\n"), key, fragment)
 
 
 def test_check_refuses_a_zero_length_joint_line(tmp_path):
     text = BOX + "joint_lines:\n  - {joint: bedding, start: [0, 1], end: [0, 1]}\n"
-    refused(check(tmp_path, text), "joint_lines[0]", "zero length")
+    assert_refused(check(tmp_path, text), "joint_lines[0]", "zero length")
 
 
 def test_a_model_without_a_fixed_block_says_what_nothing_holds(tmp_path):
-    line = refused(
+    line = assert_refused(
         check(tmp_path, BOX.replace("fixed: true", "material: rock")),
         "blocks 0, 1, 2 are held by nothing: no block is fixed",
         "fixed: true",
@@ -436,7 +436,7 @@ def test_a_group_that_reaches_no_fixed_block_is_named(tmp_path):
         "  - {material: rock, vertices: [[10, 0], [12, 0], [12, 1], [10, 1]]}\n"
         "  - {material: rock, vertices: [[10, 1], [12, 1], [12, 2], [10, 2]]}\n"
     )
-    line = refused(
+    line = assert_refused(
         check(tmp_path, text),
         "blocks 3, 4 are held by nothing",
         "touch one another but no fixed block",
@@ -471,7 +471,9 @@ def test_parse_model_bounds_in_process():
 def test_schema_does_not_overwrite_without_overwrite(tmp_path):
     model = tmp_path / "m.yaml"
     model.write_text(BOX)
-    refused(inproc("schema", "--out", "m.yaml", cwd=tmp_path), "exists already", "--overwrite")
+    assert_refused(
+        inproc("schema", "--out", "m.yaml", cwd=tmp_path), "exists already", "--overwrite"
+    )
     assert model.read_text() == BOX
     r = inproc("schema", "--out", "m.yaml", "--overwrite", cwd=tmp_path)
     assert r.returncode == 0 and model.read_text().startswith("{")
@@ -482,7 +484,7 @@ def test_results_never_overwrite_the_model(tmp_path):
     model = tmp_path / "model" / "result.json"
     model.write_text(BOX)
     r = rockdem("run", "model/result.json", "--out", "model", "--overwrite", cwd=tmp_path)
-    refused(r, "--out model", "over the model file")
+    assert_refused(r, "--out model", "over the model file")
     assert model.read_text() == BOX
     assert sorted(p.name for p in (tmp_path / "model").iterdir()) == ["result.json"]
 
@@ -490,7 +492,7 @@ def test_results_never_overwrite_the_model(tmp_path):
 def test_a_plot_never_overwrites_the_model(tmp_path):
     (tmp_path / "m.png").write_text(BOX)
     r = inproc("plot", "m.png", "--what", "model", "--out", "m.png", "--overwrite", cwd=tmp_path)
-    refused(r, "is the model file")
+    assert_refused(r, "is the model file")
     assert (tmp_path / "m.png").read_text() == BOX
 
 
@@ -498,7 +500,7 @@ def test_a_result_name_taken_by_a_folder_writes_nothing(tmp_path):
     (tmp_path / "m.yaml").write_text(BOX)
     (tmp_path / "out" / "result.json").mkdir(parents=True)
     r = rockdem("run", "m.yaml", "--out", "out", "--overwrite", cwd=tmp_path)
-    refused(r, "result.json is a folder")
+    assert_refused(r, "result.json is a folder")
     assert sorted(p.name for p in (tmp_path / "out").iterdir()) == ["result.json"]
 
 
@@ -506,14 +508,14 @@ def test_a_result_name_taken_by_a_folder_writes_nothing(tmp_path):
 def test_out_under_a_file_is_refused_before_computing(tmp_path, command):
     (tmp_path / "m.yaml").write_text(BOX)
     r = rockdem(command, "m.yaml", "--out", "m.yaml/results", cwd=tmp_path)
-    refused(r, "--out m.yaml/results", "is a file, not a folder")
+    assert_refused(r, "--out m.yaml/results", "is a file, not a folder")
 
 
 def test_stabilise_does_not_overwrite_earlier_results(tmp_path):
     (tmp_path / "m.yaml").write_text(BOX)
     (tmp_path / "out").mkdir()
     (tmp_path / "out" / "measures.csv").write_text("mine")
-    refused(
+    assert_refused(
         rockdem("stabilise", "m.yaml", "--out", "out", cwd=tmp_path), "already holds measures.csv"
     )
     assert (tmp_path / "out" / "measures.csv").read_text() == "mine"
@@ -528,7 +530,9 @@ def test_a_read_only_out_folder_is_refused_before_computing(tmp_path):
     ro.mkdir()
     ro.chmod(0o555)
     try:
-        refused(rockdem("run", "m.yaml", "--out", "ro/results", cwd=tmp_path), "not writable")
+        assert_refused(
+            rockdem("run", "m.yaml", "--out", "ro/results", cwd=tmp_path), "not writable"
+        )
     finally:
         ro.chmod(0o755)
 
@@ -539,7 +543,7 @@ def test_example_copy_never_follows_a_link(tmp_path):
     outside = tmp_path / "outside.yaml"
     (folder / "toppling.yaml").symlink_to(outside)  # dangling
     r = rockdem("example", "copy", "toppling", "copy", "--overwrite", cwd=tmp_path)
-    refused(r, "is a link")
+    assert_refused(r, "is a link")
     assert not outside.exists()
 
 
