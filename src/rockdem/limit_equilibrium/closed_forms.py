@@ -1,0 +1,466 @@
+"""Classic closed-form limit-equilibrium solutions for rock slopes.
+
+* :func:`plane_failure` - a block sliding on one plane behind a vertical
+  tension crack, with water in the crack and on the plane, a horizontal
+  seismic coefficient and a bolt (Hoek & Bray 1981, ch. 7; Wyllie & Mah
+  2004, section 6.3).
+* :func:`toppling` - Goodman & Bray (1976) block toppling on a stepped
+  base: the limit-equilibrium recursion from the crest down that classifies
+  every block as stable, toppling or sliding and gives the force ``P0`` the
+  toe needs; :func:`toppling_fos` reduces ``tan(phi)`` until ``P0 = 0``.
+* :func:`two_block_wedge` - the seed paper's Eq. 7 (the formulas live in
+  :mod:`rockdem.verification`; this only wraps them).
+
+Angles are in degrees, forces per unit thickness of the section, any
+consistent units.  Every argument is checked; a bad one raises
+:class:`~rockdem.errors.InputError` naming it.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.optimize import brentq
+
+from ..errors import InputError, check_number
+from ..verification import wedge_fos, wedge_thrust
+
+__all__ = [
+    "PlaneFailure",
+    "Toppling",
+    "TwoBlockWedge",
+    "plane_failure",
+    "plane_failure_fos",
+    "stepped_heights",
+    "toppling",
+    "toppling_fos",
+    "two_block_wedge",
+]
+
+
+# ------------------------------------------------------------ plane failure
+def plane_failure_fos(
+    weight: float,
+    area: float,
+    plane_dip: float,
+    friction_angle: float,
+    *,
+    cohesion: float = 0.0,
+    uplift: float = 0.0,
+    crack_thrust: float = 0.0,
+    seismic_kh: float = 0.0,
+    bolt_force: float = 0.0,
+    bolt_angle: float = 0.0,
+) -> float:
+    """Hoek & Bray's factor of safety of a block on one plane (the formula only).
+
+    ``FS = (c A + (W (cos psi - kh sin psi) - U - V sin psi + T sin(psi + theta)) tan phi)
+    / (W (sin psi + kh cos psi) + V cos psi - T cos(psi + theta))``
+
+    Parameters
+    ----------
+    weight : float
+        ``W``, weight of the sliding block.
+    area : float
+        ``A``, length of the sliding plane (area per unit thickness).
+    plane_dip : float
+        ``psi_p``, dip of the sliding plane.
+    friction_angle, cohesion : float
+        ``phi`` and ``c`` of the sliding plane.
+    uplift : float
+        ``U``, water force on the sliding plane.
+    crack_thrust : float
+        ``V``, water force in the vertical tension crack.
+    seismic_kh : float
+        Horizontal seismic coefficient, out of the face (``kh W``).
+    bolt_force, bolt_angle : float
+        ``T`` and its plunge ``theta`` below the horizontal, into the slope.
+    """
+    psi, phi, th = np.radians([plane_dip, friction_angle, bolt_angle])
+    normal = (
+        weight * (np.cos(psi) - seismic_kh * np.sin(psi))
+        - uplift
+        - crack_thrust * np.sin(psi)
+        + bolt_force * np.sin(psi + th)
+    )
+    driving = (
+        weight * (np.sin(psi) + seismic_kh * np.cos(psi))
+        + crack_thrust * np.cos(psi)
+        - bolt_force * np.cos(psi + th)
+    )
+    if driving <= 0:
+        return float("inf")
+    return float((cohesion * area + normal * np.tan(phi)) / driving)
+
+
+@dataclass(frozen=True)
+class PlaneFailure:
+    """Result of :func:`plane_failure` (forces per unit thickness)."""
+
+    fos: float
+    weight: float  #: W
+    area: float  #: A, length of the sliding plane below the crack
+    uplift: float  #: U = gamma_w z_w A / 2
+    crack_thrust: float  #: V = gamma_w z_w^2 / 2
+    crack_depth: float  #: z
+    crack_in_face: bool  #: the crack cuts the face (not the upper surface)
+
+    def as_dict(self) -> dict:
+        return dict(self.__dict__)
+
+
+def plane_failure(
+    *,
+    height: float,
+    face_angle: float,
+    plane_dip: float,
+    friction_angle: float,
+    unit_weight: float,
+    cohesion: float = 0.0,
+    crack_depth: float | None = None,
+    crack_distance: float | None = None,
+    water_depth: float = 0.0,
+    water_unit_weight: float = 9.81,
+    seismic_kh: float = 0.0,
+    bolt_force: float = 0.0,
+    bolt_angle: float = 0.0,
+) -> PlaneFailure:
+    """Plane failure with a vertical tension crack (Hoek & Bray 1981, ch. 7).
+
+    A slope of height ``H`` with a face dipping ``psi_f`` and a horizontal
+    upper surface; the block slides on a plane dipping ``psi_p`` that
+    daylights at the toe, behind a vertical tension crack of depth ``z``
+    filled with water to ``z_w``.  Water pressure falls linearly along the
+    plane from ``gamma_w z_w`` at the foot of the crack to zero at the toe.
+
+    Parameters
+    ----------
+    height : float
+        ``H``, slope height (toe to crest).
+    face_angle : float
+        ``psi_f``, dip of the face, steeper than the plane.
+    plane_dip : float
+        ``psi_p``, dip of the sliding plane, 0 < psi_p < psi_f.
+    friction_angle, cohesion : float
+        ``phi`` and ``c`` of the sliding plane.
+    unit_weight : float
+        ``gamma_r`` of the rock.
+    crack_depth : float, optional
+        ``z``, depth of the crack below the upper surface (0 <= z < H).
+    crack_distance : float, optional
+        ``b``, horizontal distance of the crack behind the crest (instead
+        of ``crack_depth``); neither: no crack (the plane reaches the upper
+        surface).
+    water_depth : float
+        ``z_w``, depth of water in the crack (0 <= z_w <= z).
+    water_unit_weight : float
+        ``gamma_w`` (9.81 kN/m^3 by default: give 1.0 for t/m^3).
+    seismic_kh : float
+        Horizontal seismic coefficient out of the face.
+    bolt_force, bolt_angle : float
+        A bolt force ``T`` per unit thickness and its plunge below the
+        horizontal, into the slope.
+
+    Returns
+    -------
+    PlaneFailure
+        The factor of safety and ``W``, ``A``, ``U``, ``V``, ``z``.
+    """
+    where = "plane_failure"
+    H = check_number(where, "height", height, lo=0.0, open_lo=True)
+    psi_f = check_number(where, "face_angle", face_angle, lo=0.0, hi=90.0, open_lo=True)
+    psi_p = check_number(where, "plane_dip", plane_dip, lo=0.0, hi=psi_f, open_lo=True)
+    check_number(where, "friction_angle", friction_angle, lo=0.0, hi=90.0)
+    gamma = check_number(where, "unit_weight", unit_weight, lo=0.0, open_lo=True)
+    check_number(where, "cohesion", cohesion, lo=0.0)
+    gamma_w = check_number(where, "water_unit_weight", water_unit_weight, lo=0.0)
+    check_number(where, "seismic_kh", seismic_kh, lo=-1.0, hi=1.0)
+    check_number(where, "bolt_force", bolt_force, lo=0.0)
+    check_number(where, "bolt_angle", bolt_angle, lo=-90.0, hi=90.0)
+    cot_p, cot_f = 1 / np.tan(np.radians(psi_p)), 1 / np.tan(np.radians(psi_f))
+    if crack_depth is not None and crack_distance is not None:
+        raise InputError(
+            f"{where} crack_distance", "both crack_depth and crack_distance are given", "give one"
+        )
+    if crack_distance is not None:
+        b = check_number(where, "crack_distance", crack_distance, lo=0.0)
+        z = H - (b + H * cot_f) * np.tan(np.radians(psi_p))
+        if z <= 0:
+            raise InputError(
+                f"{where} crack_distance",
+                f"a crack {b:g} behind the crest lies beyond where the plane reaches the "
+                "upper surface",
+                f"give a distance < {H * (cot_p - cot_f):.4g}",
+            )
+    else:
+        z = check_number(where, "crack_depth", crack_depth or 0.0, lo=0.0, hi=H)
+    z_w = check_number(where, "water_depth", water_depth, lo=0.0)
+    if z_w > z * (1 + 1e-12):
+        raise InputError(
+            f"{where} water_depth",
+            f"{z_w:g} is deeper than the crack ({z:.4g})",
+            "give 0 <= water_depth <= crack depth",
+        )
+    in_face = z / H > 1 - cot_f * np.tan(np.radians(psi_p))
+    if in_face:
+        weight = (
+            0.5
+            * gamma
+            * H**2
+            * ((1 - z / H) ** 2 * cot_p * (cot_p * np.tan(np.radians(psi_f)) - 1))
+        )
+    else:
+        weight = 0.5 * gamma * H**2 * ((1 - (z / H) ** 2) * cot_p - cot_f)
+    area = (H - z) / np.sin(np.radians(psi_p))
+    U = 0.5 * gamma_w * z_w * area
+    V = 0.5 * gamma_w * z_w**2
+    fos = plane_failure_fos(
+        weight,
+        area,
+        psi_p,
+        friction_angle,
+        cohesion=cohesion,
+        uplift=U,
+        crack_thrust=V,
+        seismic_kh=seismic_kh,
+        bolt_force=bolt_force,
+        bolt_angle=bolt_angle,
+    )
+    return PlaneFailure(
+        fos, float(weight), float(area), float(U), float(V), float(z), bool(in_face)
+    )
+
+
+# ----------------------------------------------------------------- toppling
+def stepped_heights(n_blocks: int, crest_block: int, a1: float, a2: float, b: float) -> np.ndarray:
+    """Heights ``y_n`` of a regular toppling slope (Goodman & Bray 1976).
+
+    Blocks are numbered 1 (toe) to ``n_blocks``; ``crest_block`` is the one
+    the crest cuts.  ``y_n = n (a1 - b)`` up to the crest, then
+    ``y_n = y_(n-1) - a2 - b`` (Wyllie & Mah 2004, eqs. 9.10-9.11), with
+    ``a1 = dx tan(psi_f - psi_p)``, ``a2 = dx tan(psi_p - psi_s)`` and the
+    step ``b = dx tan(psi_b - psi_p)``.
+    """
+    n = int(check_number("toppling", "n_blocks", n_blocks, lo=1))
+    nc = int(check_number("toppling", "crest_block", crest_block, lo=1, hi=n + 1))
+    y = np.zeros(n)
+    for k in range(1, n + 1):
+        y[k - 1] = k * (a1 - b) if k <= nc else y[k - 2] - a2 - b
+    return y
+
+
+@dataclass(frozen=True)
+class Toppling:
+    """Result of :func:`toppling`; arrays are per block, toe (1) first.
+
+    ``p_topple[i]`` and ``p_slide[i]`` are ``P_(n-1),t`` and ``P_(n-1),s`` of
+    block ``n = i + 1``: the force on its lower face that just prevents it
+    from toppling or from sliding; ``p_lower[i]`` the force taken
+    (``P_(n-1)``), ``p_upper[i]`` the force from the block above (``P_n``).
+    ``support`` is ``P0 = max(P_0,t, P_0,s)`` of the toe block, the force the
+    toe needs (<= 0: none; its size is then the margin).
+    """
+
+    heights: np.ndarray
+    weight: np.ndarray
+    upper_lever: np.ndarray  #: M_n, height of P_n on the upper face
+    lower_lever: np.ndarray  #: L_n, height of P_(n-1) on the lower face
+    p_upper: np.ndarray
+    p_topple: np.ndarray
+    p_slide: np.ndarray
+    p_lower: np.ndarray
+    normal: np.ndarray  #: R_n on the base
+    shear: np.ndarray  #: S_n on the base
+    mode: tuple[str, ...]  #: "stable", "toppling" or "sliding"
+    support: float
+
+    def blocks(self, mode: str) -> list[int]:
+        """Block numbers (1 = toe) in ``mode``."""
+        return [i + 1 for i, m in enumerate(self.mode) if m == mode]
+
+
+def toppling(
+    heights: Sequence[float],
+    *,
+    width: float,
+    step: float,
+    base_dip: float,
+    base_friction: float,
+    face_friction: float | None = None,
+    unit_weight: float = 1.0,
+) -> Toppling:
+    """Goodman & Bray (1976) toppling of rectangular blocks on a stepped base.
+
+    Blocks of width ``dx`` and heights ``y_n`` (toe first) stand on a
+    stepped base whose treads dip ``psi_p``; each block's base is ``step``
+    (``b``) higher than the one below it.  Starting at the top with
+    ``P_n = 0``, each block needs on its lower face
+
+        P_(n-1),t = [P_n (M_n - dx tan phi_d) + W_n/2 (y_n sin psi_p - dx cos psi_p)] / L_n
+        P_(n-1),s = P_n - W_n (tan phi_p cos psi_p - sin psi_p) / (1 - tan phi_p tan phi_d)
+
+    to prevent toppling and sliding (Hoek & Bray 1981, ch. 10; Wyllie & Mah
+    2004, eqs. 9.12-9.16).  A block is stable when both are <= 0 (it passes
+    nothing on), toppling when ``P_t >= P_s``, else sliding; it passes on the
+    larger.  ``M_n`` and ``L_n`` are where the neighbours touch it: the top of
+    the lower of the two blocks, measured from its own base,
+    ``M_n = min(y_n, y_(n+1) + b)``, ``L_n = min(y_n, y_(n-1) - b)`` (this gives
+    Goodman & Bray's ``y_n``, ``y_n - a1`` below the crest and ``y_n - a2``,
+    ``y_n`` above it); the toe block's ``y_0`` extends the regular pattern,
+    ``2 y_1 - y_2``.  Inter-block shear is ``Q = P tan phi_d``.
+
+    Parameters
+    ----------
+    heights : sequence of float
+        ``y_n``, block heights from the toe (block 1) up (see
+        :func:`stepped_heights`).
+    width : float
+        ``dx``, block width (the spacing of the toppling joints).
+    step : float
+        ``b``, the step of the base from one block to the next.
+    base_dip : float
+        ``psi_p``, dip of the block bases (the cross joints).
+    base_friction, face_friction : float
+        ``phi_p`` on the bases and ``phi_d`` on the block faces (default: ``phi_p``).
+    unit_weight : float
+        ``W_n = gamma y_n dx``.
+    """
+    where = "toppling"
+    y = np.asarray(heights, dtype=float)
+    if y.ndim != 1 or len(y) < 2 or not np.all(np.isfinite(y)) or np.any(y <= 0):
+        raise InputError(
+            f"{where} heights", "needs two or more positive block heights", "list them toe first"
+        )
+    dx = check_number(where, "width", width, lo=0.0, open_lo=True)
+    b = check_number(where, "step", step, lo=0.0)
+    psi = np.radians(check_number(where, "base_dip", base_dip, lo=0.0, hi=90.0))
+    tp = np.tan(np.radians(check_number(where, "base_friction", base_friction, lo=0.0, hi=90.0)))
+    fd = base_friction if face_friction is None else face_friction
+    td = np.tan(np.radians(check_number(where, "face_friction", fd, lo=0.0, hi=90.0)))
+    gamma = check_number(where, "unit_weight", unit_weight, lo=0.0, open_lo=True)
+    return _toppling(y, dx, b, psi, tp, td, gamma)
+
+
+def _toppling(y, dx, b, psi, tp, td, gamma) -> Toppling:
+    n = len(y)
+    W = gamma * y * dx
+    above = np.append(y[1:] + b, np.inf)
+    below = np.concatenate([[2 * y[0] - y[1]], y[:-1]]) - b
+    M = np.minimum(y, above)
+    L = np.minimum(y, below)
+    p_up, p_t, p_s, p_low = (np.zeros(n) for _ in range(4))
+    mode = [""] * n
+    P = 0.0  # force on the upper face of the block (never a pull)
+    for i in range(n - 1, -1, -1):
+        p_up[i] = P
+        moment = P * (M[i] - dx * td) + 0.5 * W[i] * (y[i] * np.sin(psi) - dx * np.cos(psi))
+        if L[i] > 0:
+            p_t[i] = moment / L[i]
+        else:  # nothing below the block's base can hold it up
+            p_t[i] = np.inf if moment > 0 else -np.inf
+        denom = 1 - tp * td
+        # friction beyond 1 - tan phi_p tan phi_d = 0 locks the block against sliding
+        p_s[i] = P - W[i] * (tp * np.cos(psi) - np.sin(psi)) / denom if denom > 0 else -np.inf
+        need = max(p_t[i], p_s[i])
+        if P <= 0 and need <= 0:
+            mode[i] = "stable"  # neither pushed nor moving: passes nothing on
+        else:
+            mode[i] = "toppling" if p_t[i] >= p_s[i] else "sliding"
+        p_low[i] = need if mode[i] != "stable" else 0.0
+        P = max(need, 0.0)
+    pushed = np.maximum(p_low, 0.0)  # the block below cannot pull
+    R = W * np.cos(psi) + (p_up - pushed) * td
+    S = W * np.sin(psi) + (p_up - pushed)
+    # the toe's need, signed (< 0: a margin), finite for the root search
+    support = max(p_t[0], p_s[0], -1e12 * float(W.sum()))
+    return Toppling(y, W, M, L, p_up, p_t, p_s, p_low, R, S, tuple(mode), float(support))
+
+
+def toppling_fos(
+    heights: Sequence[float],
+    *,
+    width: float,
+    step: float,
+    base_dip: float,
+    base_friction: float,
+    face_friction: float | None = None,
+    unit_weight: float = 1.0,
+) -> float | None:
+    """Factor of safety of a toppling slope: the factor ``F`` dividing
+    ``tan(phi_p)`` and ``tan(phi_d)`` for which the toe needs no support
+    (``P0 = 0``; Hoek & Bray 1981, ch. 10): the first factor, from 0.05 up,
+    at which the toe needs support.  None when even F = 0.05 needs support
+    (rotation that friction cannot hold); ``inf`` when no factor up to 100
+    does."""
+    result = toppling(
+        heights,
+        width=width,
+        step=step,
+        base_dip=base_dip,
+        base_friction=base_friction,
+        face_friction=face_friction,
+        unit_weight=unit_weight,
+    )
+    y = result.heights
+    psi = np.radians(base_dip)
+    tp = np.tan(np.radians(base_friction))
+    td = np.tan(np.radians(base_friction if face_friction is None else face_friction))
+
+    def support(F: float) -> float:
+        return _toppling(y, width, step, psi, tp / F, td / F, unit_weight).support
+
+    grid = np.geomspace(0.05, 100.0, 300)
+    values = np.array([support(F) for F in grid])
+    if values[0] > 0:
+        return None
+    if values[-1] <= 0:
+        return float("inf")
+    k = int(np.argmax(values > 0))
+    return float(brentq(support, grid[k - 1], grid[k], xtol=1e-12))
+
+
+# ------------------------------------------------------------ two-block wedge
+@dataclass(frozen=True)
+class TwoBlockWedge:
+    """Result of :func:`two_block_wedge`."""
+
+    thrust: float  #: Eq. 7: the force the passive block needs (> 0: unstable)
+    fos: float  #: all three tan(phi) divided by it make the thrust zero
+
+
+def two_block_wedge(
+    *,
+    active_weight: float,
+    passive_weight: float,
+    active_dip: float,
+    passive_dip: float,
+    active_friction: float,
+    passive_friction: float,
+    joint_friction: float,
+) -> TwoBlockWedge:
+    """The seed paper's two-block wedge (Eq. 7, docs/method.md section 5).
+
+    An active block (``W1``) on a plane dipping ``d1`` pushes a passive block
+    (``W2``) on a flatter plane (``d2``) across a vertical joint; friction
+    ``p1``, ``p2``, ``p3`` on the upper, lower and vertical surfaces.  The
+    formulas are :func:`rockdem.verification.wedge_thrust` and
+    :func:`~rockdem.verification.wedge_fos`.
+    """
+    where = "wedge"
+    w1 = check_number(where, "active_weight", active_weight, lo=0.0, open_lo=True)
+    w2 = check_number(where, "passive_weight", passive_weight, lo=0.0)
+    d1 = check_number(where, "active_dip", active_dip, lo=0.0, hi=90.0, open_lo=True)
+    d2 = check_number(where, "passive_dip", passive_dip, lo=-90.0, hi=d1)
+    p = [
+        check_number(where, key, value, lo=0.0, hi=90.0)
+        for key, value in (
+            ("active_friction", active_friction),
+            ("passive_friction", passive_friction),
+            ("joint_friction", joint_friction),
+        )
+    ]
+    return TwoBlockWedge(
+        float(wedge_thrust(w1, w2, d1, d2, *p)), float(wedge_fos(w1, w2, d1, d2, *p))
+    )

@@ -1,0 +1,173 @@
+"""Limit equilibrium beside the DEM (issue 14): closed forms against published
+worked examples, and Sarma's method on the DEM's own mechanism."""
+
+import numpy as np
+import pytest
+
+from rockdem.limit_equilibrium import plane_failure, stepped_heights, toppling, toppling_fos
+from rockdem.limit_equilibrium import two_block_wedge as wedge_le
+from rockdem.verification import wedge_fos, wedge_thrust
+
+# --------------------------------------------------------------- plane failure
+# Worked example of the plane-failure model in the MATTERCLIFF 1 help
+# (CREALP, "F is computed following the plane failure analysis of HOEK & BRAY
+# (1981, pp. 150-154)"): H = 30 m, tension crack d = 9 m behind the crest in
+# the (horizontal) upper surface, gamma_r = 25.5 kN/m^3, gamma_w = 9.81 kN/m^3,
+# face 60 deg, plane 30 deg, c = 48 kPa, phi = 30 deg.  Published:
+# z = 14.804 m; F = 1.347 drained, 0.794 crack filled; with a bolt of
+# T = 1000 (kN/m) plunging 24 deg: F = 1.695 drained, 1.000 filled.
+PLANE_EXAMPLE = dict(
+    height=30.0,
+    face_angle=60.0,
+    plane_dip=30.0,
+    friction_angle=30.0,
+    cohesion=48.0,
+    unit_weight=25.5,
+    water_unit_weight=9.81,
+    crack_distance=9.0,
+)
+
+
+@pytest.mark.parametrize(
+    ("filled", "bolt", "published"),
+    [(False, 0.0, 1.347), (True, 0.0, 0.794), (False, 1000.0, 1.695), (True, 1000.0, 1.000)],
+)
+def test_plane_failure_reproduces_the_published_example(filled, bolt, published):
+    dry = plane_failure(**PLANE_EXAMPLE)
+    assert round(dry.crack_depth, 3) == 14.804
+    assert not dry.crack_in_face
+    zw = dry.crack_depth if filled else 0.0
+    r = plane_failure(**PLANE_EXAMPLE, water_depth=zw, bolt_force=bolt, bolt_angle=24.0)
+    assert round(r.fos, 3) == pytest.approx(published, abs=1e-9)
+
+
+def test_plane_failure_forces_are_hoek_and_brays():
+    """W, U, V by Hoek & Bray's formulas (1981, ch. 7, crack in the upper
+    surface): W = gamma H^2 / 2 [(1 - (z/H)^2) cot psi_p - cot psi_f],
+    U = gamma_w z_w A / 2, V = gamma_w z_w^2 / 2, A = (H - z) / sin psi_p;
+    and the weight equals the area of the block's polygon times gamma."""
+    H, z, zw = 30.0, 12.0, 7.0
+    r = plane_failure(**{**PLANE_EXAMPLE, "crack_distance": None}, crack_depth=z, water_depth=zw)
+    cot = lambda d: 1 / np.tan(np.radians(d))  # noqa: E731
+    assert r.weight == pytest.approx(0.5 * 25.5 * H**2 * ((1 - (z / H) ** 2) * cot(30) - cot(60)))
+    A = (H - z) / np.sin(np.radians(30))
+    assert r.area == pytest.approx(A)
+    assert r.uplift == pytest.approx(0.5 * 9.81 * zw * A)
+    assert r.crack_thrust == pytest.approx(0.5 * 9.81 * zw**2)
+    # polygon: toe (0, 0), crest, crack top, crack foot on the plane
+    xc = H * cot(30) - z * cot(30)  # foot of the crack: y = x tan 30 = H - z
+    poly = np.array([(0, 0), (H * cot(60), H), (xc, H), (xc, H - z)])
+    x, y = poly.T
+    area = 0.5 * abs(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1)))
+    assert r.weight == pytest.approx(25.5 * area)
+
+
+def test_plane_failure_crack_in_the_face_and_seismic():
+    """A crack deep enough to cut the face: Hoek & Bray's other weight,
+    W = gamma H^2 / 2 [(1 - z/H)^2 cot psi_p (cot psi_p tan psi_f - 1)]; a
+    seismic coefficient lowers the factor as (cos - k sin)/(sin + k cos)."""
+    H, z = 30.0, 25.0
+    r = plane_failure(**{**PLANE_EXAMPLE, "crack_distance": None}, crack_depth=z)
+    assert r.crack_in_face
+    cot_p, tan_f = 1 / np.tan(np.radians(30)), np.tan(np.radians(60))
+    assert r.weight == pytest.approx(
+        0.5 * 25.5 * H**2 * (1 - z / H) ** 2 * cot_p * (cot_p * tan_f - 1)
+    )
+    k = 0.1
+    rk = plane_failure(**{**PLANE_EXAMPLE, "cohesion": 0.0}, seismic_kh=k)
+    d, p = np.radians(30), np.radians(30)
+    assert rk.fos == pytest.approx(
+        np.tan(p) * (np.cos(d) - k * np.sin(d)) / (np.sin(d) + k * np.cos(d))
+    )
+
+
+# -------------------------------------------------------------------- toppling
+# Goodman & Bray (1976) toppling on a stepped base, the worked example of
+# Hoek & Bray (1981, ch. 10) and Wyllie & Mah (2004, section 9.4): 16 blocks
+# 10 m wide on bases dipping 30 deg, a1 = 5.0 m, a2 = 5.2 m, b = 1.0 m, the
+# crest at block 10, gamma = 2.5 t/m^3, phi = 38.15 deg on bases and faces
+# gives limiting equilibrium (P0 = 0): blocks 14-16 stable, 4-13 toppling,
+# 1-3 sliding.  Published heights y_n (m): 4, 8, ..., 40 up to the crest,
+# then 33.8, 27.6, 21.4, 15.2, 9.0, 2.8.
+EXAMPLE_HEIGHTS = [4, 8, 12, 16, 20, 24, 28, 32, 36, 40, 33.8, 27.6, 21.4, 15.2, 9.0, 2.8]
+
+
+def _example(phi=38.15):
+    y = stepped_heights(16, 10, 5.0, 5.2, 1.0)
+    return y, toppling(y, width=10.0, step=1.0, base_dip=30.0, base_friction=phi, unit_weight=2.5)
+
+
+def test_toppling_heights_and_classification_are_the_published_ones():
+    y, t = _example()
+    assert np.round(y, 1).tolist() == pytest.approx(EXAMPLE_HEIGHTS)
+    assert t.blocks("stable") == [14, 15, 16]
+    assert t.blocks("toppling") == list(range(4, 14))
+    assert t.blocks("sliding") == [1, 2, 3]
+    # W_n = gamma y_n dx (t): 70 t for the top block, 1000 t at the crest
+    assert t.weight[15] == pytest.approx(70.0) and t.weight[9] == pytest.approx(1000.0)
+
+
+def test_toppling_limiting_friction_is_the_published_38_15_degrees():
+    """P0 = 0 at phi = 38.15 deg (published; here within 0.3% of the largest
+    inter-block force, and the friction angle of P0 = 0 within 0.05 deg)."""
+    y, t = _example()
+    assert abs(t.support) < 0.005 * t.p_lower.max()
+    F = toppling_fos(y, width=10.0, step=1.0, base_dip=30.0, base_friction=38.15, unit_weight=2.5)
+    phi_limit = np.degrees(np.arctan(np.tan(np.radians(38.15)) / F))
+    assert phi_limit == pytest.approx(38.15, abs=0.05)
+    # more friction: stable with a margin (P0 < 0); less: support needed
+    assert _example(42.0)[1].support < 0 < _example(35.0)[1].support
+
+
+def test_every_toppling_block_is_in_equilibrium():
+    """At the limiting friction (P0 = 0) the recursion's forces balance every
+    moving block as a free body, in plain vector statics (an independent
+    check of the formulas): forces along and normal to the base, moments
+    about the toe of each toppling block, S = R tan phi on each sliding one.
+
+    Frame of the base: x up the dip, y normal to it.  Block n spans x in
+    [0, dx]; P_n from the block above acts on the face x = dx at height M_n
+    pushing -x, with its shear P_n tan phi_d pushing -y; P_(n-1) acts on
+    x = 0 at height L_n pushing +x, with +P_(n-1) tan phi_d; the base forces
+    S (+x) and R (+y) act at the toe corner x = 0 of a toppling block."""
+    y, _ = _example()
+    F = toppling_fos(y, width=10.0, step=1.0, base_dip=30.0, base_friction=38.15, unit_weight=2.5)
+    phi = np.degrees(np.arctan(np.tan(np.radians(38.15)) / F))
+    y, t = _example(phi)
+    assert t.support == pytest.approx(0.0, abs=1e-6)
+    dx, psi = 10.0, np.radians(30.0)
+    tan_d = np.tan(np.radians(phi))
+    for i, mode in enumerate(t.mode):
+        if mode == "stable":
+            continue
+        W, Pn, Pl = t.weight[i], t.p_upper[i], max(t.p_lower[i], 0.0)
+        g = W * np.array([-np.sin(psi), -np.cos(psi)])  # weight in the base frame
+        forces = [
+            (g, np.array([dx / 2, y[i] / 2])),
+            (np.array([-Pn, -Pn * tan_d]), np.array([dx, t.upper_lever[i]])),
+            (np.array([Pl, Pl * tan_d]), np.array([0.0, t.lower_lever[i]])),
+            (np.array([t.shear[i], t.normal[i]]), np.array([0.0, 0.0])),
+        ]
+        total = sum(f for f, _ in forces)
+        assert np.allclose(total, 0.0, atol=1e-9 * W), i + 1
+        if mode == "toppling":  # limiting: moments about the toe vanish
+            moment = sum(p[0] * f[1] - p[1] * f[0] for f, p in forces)
+            assert moment == pytest.approx(0.0, abs=1e-9 * W * dx), i + 1
+        else:  # sliding at limit: S = R tan phi_p
+            assert t.shear[i] == pytest.approx(t.normal[i] * tan_d), i + 1
+
+
+# ---------------------------------------------------------------------- wedge
+def test_two_block_wedge_is_eq7():
+    r = wedge_le(
+        active_weight=200,
+        passive_weight=75,
+        active_dip=37,
+        passive_dip=27,
+        active_friction=35,
+        passive_friction=30,
+        joint_friction=35,
+    )
+    assert round(r.thrust, 2) == 2.64  # the paper's table (docs/method.md, section 5)
+    assert r.thrust == wedge_thrust(200, 75, 37, 27, 35, 30, 35)
+    assert r.fos == wedge_fos(200, 75, 37, 27, 35, 30, 35)
