@@ -1,12 +1,30 @@
 """Limit equilibrium beside the DEM (issue 14): closed forms against published
 worked examples, and Sarma's method on the DEM's own mechanism."""
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
-from rockdem.limit_equilibrium import plane_failure, stepped_heights, toppling, toppling_fos
+import rockdem as rd
+from rockdem.limit_equilibrium import (
+    plane_failure,
+    plane_failure_fos,
+    sarma,
+    stepped_heights,
+    toppling,
+    toppling_fos,
+)
 from rockdem.limit_equilibrium import two_block_wedge as wedge_le
-from rockdem.verification import wedge_fos, wedge_thrust
+from rockdem.verification import (
+    bedding_slope,
+    block_on_plane,
+    sliding_fos,
+    toppling_block,
+    two_block_wedge,
+    wedge_fos,
+    wedge_thrust,
+)
 
 # --------------------------------------------------------------- plane failure
 # Worked example of the plane-failure model in the MATTERCLIFF 1 help
@@ -171,3 +189,129 @@ def test_two_block_wedge_is_eq7():
     assert round(r.thrust, 2) == 2.64  # the paper's table (docs/method.md, section 5)
     assert r.thrust == wedge_thrust(200, 75, 37, 27, 35, 30, 35)
     assert r.fos == wedge_fos(200, 75, 37, 27, 35, 30, 35)
+
+
+# ------------------------------------------------ Sarma on the DEM's mechanism
+def _dem_and_sarma(model, width=0.002):
+    fos = rd.factor_of_safety(model, width=width)
+    return fos, sarma(fos)
+
+
+def test_sarma_block_on_a_plane_is_tan_phi_over_tan_dip():
+    """A block on a plane (docs/method.md section 5): FS = tan phi / tan d,
+    the DEM's and Sarma's within 2% of it and of each other."""
+    model = block_on_plane(30.0, rd.Joint(normal_stiffness=1e6, friction_angle=35.0))
+    fos, le = _dem_and_sarma(model)
+    exact = np.tan(np.radians(35.0)) / np.tan(np.radians(30.0))
+    assert le.fos == pytest.approx(exact, rel=1e-6)
+    assert le.fos == pytest.approx(fos.value, rel=0.02)
+    assert le.dem_fos == fos.value and le.reason == ""
+    assert [f.kind for f in le.faces] == ["base"]
+
+
+def test_sarma_with_cohesion_and_seismic_load_is_the_sliding_closed_form():
+    """c, phi and a pseudo-static kh down the dip: sliding_fos (method.md 5,
+    cohesion kept and no tension cut-off, as limit equilibrium assumes)."""
+    joint = rd.Joint(normal_stiffness=1e6, friction_angle=30.0, cohesion=5.0)
+    loads = rd.Loads(seismic_h=0.1)
+    kw = dict(width=2.0, height=1.0, unit_weight=25.0, loads=loads)
+    uncut = replace(joint, tensile_strength=1e4).ductile
+    fos, le = _dem_and_sarma(block_on_plane(30.0, uncut, **kw))
+    exact = sliding_fos(30.0, 30.0, cohesion=5.0, length=2.0, weight=50.0, k=0.1)
+    assert le.fos == pytest.approx(exact, rel=1e-6)
+    assert le.fos == pytest.approx(fos.value, rel=0.02)
+    # with the tension cut-off the uphill end of the base opens in the DEM and
+    # loses its cohesion: a lower DEM factor, and the notes say where
+    fos, le = _dem_and_sarma(block_on_plane(30.0, joint.ductile, **kw))
+    assert le.fos == pytest.approx(exact, rel=1e-6)
+    assert fos.value < 0.98 * le.fos
+    assert any("open" in note and "cohesion" in note for note in le.notes)
+
+
+def test_sarma_bedded_slope_slides_at_tan_phi_over_tan_dip():
+    """Bedding dipping 30 deg out of the face, phi = 40, vertical cross joints
+    (rockdem.verification.bedding_slope): the daylighting layers slide at
+    tan 40 / tan 30 = 1.4534 (method.md 5); Sarma equals the DEM within 2%."""
+    model = bedding_slope(height=6.0, behind=8.0, bedding_spacing=1.0, cross_spacing=1.5)
+    fos, le = _dem_and_sarma(model)
+    exact = np.tan(np.radians(40.0)) / np.tan(np.radians(30.0))
+    assert le.fos == pytest.approx(exact, rel=1e-6)
+    assert le.fos == pytest.approx(fos.value, rel=0.02)
+    # every sliding face is a bedding plane dipping 30 degrees, pressed by the rock
+    # below (its normal, from the still rock into the moving layers, points up)
+    sliding = [f for f in le.faces if f.state == "sliding"]
+    assert sliding
+    for f in sliding:
+        assert np.degrees(np.arctan2(*f.normal)) == pytest.approx(30.0)  # up, into the layers
+        assert f.normal_force is not None and f.normal_force > 0
+
+
+@pytest.mark.parametrize(("p1", "p2"), [(35, 30), (35, 31), (36, 30), (35, 32)])
+def test_sarma_on_the_two_block_wedge_is_eq7(p1, p2):
+    """The seed paper's wedge (W1 = 200 t, W2 = 75 t, d1 = 37, d2 = 27,
+    p3 = 35): Sarma's factor is the factor that makes Eq. 7's thrust zero."""
+    model = two_block_wedge(p1, p2)
+    fos, le = _dem_and_sarma(model)
+    exact = wedge_fos(200, 75, 37, 27, p1, p2, 35)
+    assert le.fos == pytest.approx(exact, rel=1e-6)
+    assert le.fos == pytest.approx(fos.value, rel=0.02)
+    assert sorted(f.kind for f in le.faces) == ["base", "base", "between bodies"]
+    # at the limit the thrust is zero: Eq. 7 with every tan(phi) / F
+    reduced = [np.degrees(np.arctan(np.tan(np.radians(p)) / le.fos)) for p in (p1, p2, 35)]
+    assert wedge_thrust(200, 75, 37, 27, *reduced) == pytest.approx(0.0, abs=1e-6)
+
+
+def test_sarma_wedge_that_separates_rates_the_passive_block_alone():
+    """p1 = 38, p2 = 22: the blocks separate (method.md 5: the true factor is
+    tan 22 / tan 27 = 0.793, not Eq. 7's 0.979); the DEM's mechanism opens the
+    vertical joint, and Sarma rates the block that slides."""
+    _, le = _dem_and_sarma(two_block_wedge(38, 22))
+    exact = np.tan(np.radians(22)) / np.tan(np.radians(27))
+    assert le.fos == pytest.approx(exact, rel=1e-6)
+    assert le.bodies == [[2]]  # the passive block moves alone
+    assert [(f.joints, f.state) for f in le.faces] == [
+        (("lower",), "sliding"),
+        (("vertical",), "open"),
+    ]
+
+
+def test_sarma_with_water_is_hoek_and_bray():
+    """The DEM's plane failure with a full water-filled tension crack
+    (tests/test_water.py's section: H = 10 m, face 60, plane 30, crack 12 m
+    from the toe, c = 10 kPa, phi = 35): Sarma with the DEM's water loads
+    equals Hoek & Bray's formula for the same W, A, U, V."""
+    H, t = 10.0, np.tan(np.radians(30.0))
+    crest, cx = H / np.tan(np.radians(60.0)), 12.0
+    foot, out = (cx, cx * t), (H / t, H)
+    zw = H - cx * t
+    blocks = rd.Blocks.from_polygons(
+        [
+            [(-20.0, -20.0 * t), out, (40.0, H), (40.0, -30.0), (-20.0, -30.0)],
+            [foot, out, (cx, H)],
+            [(0.0, 0.0), foot, (cx, H), (crest, H)],
+        ],
+        fixed=[True, True, False],
+        unit_weight=26.0,
+    )
+    loads = rd.Loads(water_table=((0.0, 0.0), (cx, H)), water_unit_weight=9.81)
+    joint = rd.Joint(normal_stiffness=1e6, friction_angle=35.0, cohesion=10.0).ductile
+    fos, le = _dem_and_sarma(rd.Model(blocks, joint, loads=loads))
+    A = cx / np.cos(np.radians(30.0))
+    exact = plane_failure_fos(
+        float(blocks.weight[2]),
+        A,
+        30.0,
+        35.0,
+        cohesion=10.0,
+        uplift=0.5 * 9.81 * zw * A,
+        crack_thrust=0.5 * 9.81 * zw**2,
+    )
+    assert le.fos == pytest.approx(exact, rel=1e-6)
+    assert le.fos == pytest.approx(fos.value, rel=0.02)
+
+
+def test_sarma_says_plainly_when_the_mechanism_topples():
+    """A slender block on a steep base topples (b/h < tan psi): no number."""
+    _, le = _dem_and_sarma(toppling_block(30.0, 0.3, 2.0), width=0.01)
+    assert le.fos is None
+    assert "rotates" in le.reason and "topple" in le.reason
