@@ -1,6 +1,9 @@
 """Limit equilibrium beside the DEM (issue 14): closed forms against published
 worked examples, and Sarma's method on the DEM's own mechanism."""
 
+import json
+import subprocess
+import sys
 from dataclasses import replace
 
 import numpy as np
@@ -315,3 +318,81 @@ def test_sarma_says_plainly_when_the_mechanism_topples():
     _, le = _dem_and_sarma(toppling_block(30.0, 0.3, 2.0), width=0.01)
     assert le.fos is None
     assert "rotates" in le.reason and "topple" in le.reason
+
+
+# ---------------------------------------------------------------- rockdem le
+def _le(*args, cwd):
+    return subprocess.run(
+        [sys.executable, "-m", "rockdem", "le", *args],
+        capture_output=True,
+        text=True,
+        cwd=cwd,
+        timeout=120,
+    )
+
+
+TOPPLING_CASE = """
+name: Hoek & Bray toppling example
+units: t, m
+limit_equilibrium:
+  toppling: {n_blocks: 16, crest_block: 10, a1: 5.0, a2: 5.2, step: 1.0,
+             width: 10, base_dip: 30, base_friction: 38.15, unit_weight: 2.5}
+"""
+
+
+def test_le_runs_the_closed_form_a_case_file_names(tmp_path):
+    (tmp_path / "topple.yaml").write_text(TOPPLING_CASE)
+    r = _le("topple.yaml", "--json", cwd=tmp_path)
+    assert r.returncode == 0, r.stderr
+    doc = json.loads(r.stdout)
+    assert doc["case"] == "toppling"
+    res = doc["result"]
+    assert res["toppling_blocks"] == list(range(4, 14)) and res["sliding_blocks"] == [1, 2, 3]
+    y = stepped_heights(16, 10, 5.0, 5.2, 1.0)
+    exact = toppling(y, width=10, step=1.0, base_dip=30, base_friction=38.15, unit_weight=2.5)
+    assert res["support"] == pytest.approx(exact.support)
+    text = _le("topple.yaml", cwd=tmp_path).stdout
+    assert "Goodman & Bray" in text and "sliding blocks (3): 1, 2, 3" in text
+
+
+def test_le_on_a_model_sets_sarma_beside_the_dem(tmp_path):
+    r = _le("--example", "wedge-verification", "--json", "--quiet", cwd=tmp_path)
+    assert r.returncode == 0, r.stderr
+    doc = json.loads(r.stdout)
+    exact = wedge_fos(200, 75, 37, 27, 35, 30, 35)
+    assert doc["sarma"]["fos"] == pytest.approx(exact, rel=1e-6)
+    assert doc["dem"]["factor_of_safety"] == pytest.approx(exact, rel=0.005)
+    assert len(doc["sarma"]["faces"]) == 3
+
+
+@pytest.mark.parametrize(
+    ("text", "fragment"),
+    [
+        (
+            "limit_equilibrium:\n  plane_failure: {height: -30, face_angle: 60, plane_dip: 30,"
+            " friction_angle: 30, unit_weight: 25}\n",
+            "limit_equilibrium.plane_failure.height",
+        ),
+        ("limit_equilibrium:\n  plane_failure: {heigth: 30}\n", "plane_failure.heigth"),
+        (
+            "limit_equilibrium:\n  plane_failure: {face_angle: 60, plane_dip: 30,"
+            " friction_angle: 30, unit_weight: 25}\n",
+            "plane_failure.height: is missing",
+        ),
+        ("limit_equilibrium:\n  wedge: {}\n  toppling: {}\n", "exactly one"),
+        ("limit_equilibrium:\n  circle: {}\n", "limit_equilibrium.circle"),
+        (
+            "limit_equilibrium:\n  toppling: {heights: [1, a], width: 1, step: 0, base_dip: 30,"
+            " base_friction: 30}\n",
+            "toppling.heights",
+        ),
+        ("joints: {}\nlimit_equilibrium:\n  wedge: {}\n", "joints"),
+    ],
+)
+def test_le_bad_input_is_one_line_and_exit_2(tmp_path, text, fragment):
+    (tmp_path / "case.yaml").write_text(text)
+    r = _le("case.yaml", cwd=tmp_path)
+    assert r.returncode == 2, (r.stdout, r.stderr)
+    lines = r.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("error: case.yaml: "), r.stderr
+    assert fragment in lines[0] and "Traceback" not in r.stderr

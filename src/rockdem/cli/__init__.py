@@ -77,6 +77,7 @@ from .files import _check_new_file as _check_new_file
 from .files import _replace as _replace
 from .files import _save_file as _save_file
 from .files import _umask as _umask
+from .le import le as le
 from .model_files import example_copy as example_copy
 from .model_files import example_list as example_list
 from .model_files import schema as schema
@@ -86,6 +87,7 @@ from .model_files import schema as schema
 app.command()(check)
 app.command()(run)
 app.command()(fos)
+app.command()(le)
 app.command()(report)
 app.command()(plot)
 app.command()(schema)

@@ -1,0 +1,218 @@
+"""``rockdem le``: limit equilibrium beside the DEM.
+
+Given a model file (or ``--example``), the factor of safety by strength
+reduction and the DEM's mechanism rated by Sarma's method, side by side,
+with where they differ.  Given a limit-equilibrium case file (one whose
+section ``limit_equilibrium`` names a closed form: ``plane_failure``,
+``toppling`` or ``wedge``), that closed form.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+from rich.markup import escape
+from rich.table import Table
+
+from ..units import parse_units
+from .common import (
+    DebugOpt,
+    ExampleOpt,
+    JsonOpt,
+    ModelArg,
+    QuietOpt,
+    _echo_json,
+    _fos_options,
+    _guard,
+    _header,
+    _ids,
+    _load,
+    _model_path,
+    _progress,
+    out,
+)
+
+
+def le(
+    model: ModelArg = None,
+    example: ExampleOpt = None,
+    json_: JsonOpt = False,
+    quiet: QuietOpt = False,
+    debug: DebugOpt = False,
+) -> None:
+    """Limit equilibrium: Sarma's method on the DEM's mechanism, or a closed form.
+
+    A model file: the factor of safety by strength reduction, then the
+    mechanism it finds rated by Sarma's method (the same blocks on the same
+    slip surface), side by side, and where the two differ.  A case file with
+    a `limit_equilibrium:` section naming `plane_failure` (Hoek & Bray),
+    `toppling` (Goodman & Bray) or `wedge` (the paper's Eq. 7): that closed
+    form with the inputs given (see docs/limit-equilibrium.md).
+    """
+    with _guard(debug):
+        from ..config import read_document
+        from ..limit_equilibrium.cases import is_case_document, run_case
+
+        path = _model_path(model, example)
+        if example is None:
+            data, _ = read_document(path)
+            if is_case_document(data):
+                doc = {
+                    "file": str(path),
+                    "name": data.get("name"),
+                    **run_case(data, source=str(path)),
+                }
+                doc["units"] = data.get("units")
+                if json_:
+                    _echo_json({"command": "le", **doc})
+                    return
+                _print_case(doc)
+                return
+        _sarma_command(model, example, json_, quiet)
+
+
+def _sarma_command(model, example, json_: bool, quiet: bool) -> None:
+    from ..analysis import factor_of_safety
+    from ..limit_equilibrium import sarma
+    from . import _trial_hook
+
+    path, m, cfg = _load(model, example)
+    with _progress(quiet, "strength reduction") as bar:
+        task = bar.add_task("strength reduction trials", total=None)
+        fos = factor_of_safety(m, **_fos_options(cfg), progress=_trial_hook(bar, task))
+    result = sarma(fos)
+    units = parse_units(cfg.units)
+    doc = {
+        **_header(path, m, cfg),
+        "command": "le",
+        "dem": {"factor_of_safety": fos.value, "bracket": list(fos.bracket), "mode": fos.mode},
+        "sarma": result.as_dict(),
+    }
+    if json_:
+        _echo_json(doc)
+        return
+    _print_sarma(doc, result, fos, units)
+
+
+def _num(x: float | None, fmt: str = ".4f") -> str:
+    return "none" if x is None else format(x, fmt)
+
+
+def _print_sarma(doc: dict[str, Any], r, fos, units) -> None:
+    out.print(f"[bold]{escape(doc['model_name'])}[/bold]  ({escape(doc['model_file'])})")
+    if fos.value is not None:
+        lo, hi = fos.bracket
+        out.print(
+            f"DEM factor of safety (strength reduction): [bold]{fos.value:.4f}[/bold] "
+            f"(bracket {lo:.4f} - {hi:.4f})"
+        )
+    else:
+        out.print(f"DEM factor of safety: none ({fos.mode})")
+    if r.fos is None:
+        out.print(f"Sarma (limit equilibrium): [yellow]no factor[/yellow]: {escape(r.reason)}")
+        if r.bodies:
+            out.print(f"moving blocks: {_ids(sorted(i for b in r.bodies for i in b))}")
+        return
+    line = f"Sarma (limit equilibrium) on the DEM's mechanism: [bold]{r.fos:.4f}[/bold]"
+    if r.difference is not None:
+        line += f" ({100 * r.difference:+.1f}% against the DEM)"
+    out.print(line)
+    if r.critical_acceleration is not None:
+        out.print(
+            f"critical acceleration at full strength: Kc = {r.critical_acceleration:.4f} g "
+            "(horizontal, in the direction of motion)"
+        )
+    out.print(f"rigid bodies ({len(r.bodies)}):")
+    for i, body in enumerate(r.bodies):
+        out.print(f"  {i}: blocks {_ids(body, 20)}")
+    force = units.force if getattr(units, "force", None) else ""
+    table = Table(
+        "face",
+        "between",
+        "kind",
+        "LE state",
+        "joints",
+        "length",
+        f"N {force}".strip(),
+        f"S {force}".strip(),
+        "DEM now",
+        box=None,
+        pad_edge=False,
+    )
+    for i, f in enumerate(r.faces):
+        between = f"{'rock' if f.body_a < 0 else f.body_a}-{f.body_b}"
+        states = sorted(set(f.dem_state))
+        table.add_row(
+            str(i),
+            between,
+            f.kind,
+            f.state,
+            escape(", ".join(f.joints)),
+            f"{f.length:.3g}",
+            _num(f.normal_force, ".4g"),
+            _num(f.shear_force, ".4g"),
+            escape(", ".join(states)),
+        )
+    out.print(table)
+    out.print("where the two differ:")
+    for note in r.notes:
+        out.print(f"  - {escape(note)}")
+
+
+def _print_case(doc: dict[str, Any]) -> None:
+    title = doc.get("name") or Path(doc["file"]).name
+    out.print(f"[bold]{escape(str(title))}[/bold]  ({escape(doc['file'])})")
+    r, case = doc["result"], doc["case"]
+    if case == "plane_failure":
+        out.print("plane failure with a tension crack (Hoek & Bray 1981)")
+        out.print(f"factor of safety: [bold]{r['fos']:.4f}[/bold]")
+        where = "the face" if r["crack_in_face"] else "the upper surface"
+        out.print(f"tension crack depth z = {r['crack_depth']:.4g} (in {where})")
+        out.print(
+            f"W = {r['weight']:.5g}, A = {r['area']:.5g}, U = {r['uplift']:.5g}, "
+            f"V = {r['crack_thrust']:.5g}"
+        )
+    elif case == "wedge":
+        verdict = "stable" if r["stable"] else "unstable"
+        out.print("two-block wedge (the seed paper's Eq. 7)")
+        out.print(f"thrust the passive block needs: {r['thrust']:.4g} ({verdict})")
+        out.print(f"factor of safety: [bold]{r['fos']:.4f}[/bold]")
+    else:
+        out.print("toppling on a stepped base (Goodman & Bray 1976)")
+        need = "support needed" if r["support"] > 0 else "no support needed"
+        out.print(f"toe force P0 = {r['support']:.4g} ({need})")
+        fs = r["fos"]
+        out.print(
+            "factor of safety: "
+            + ("none (friction cannot hold it)" if fs is None else f"[bold]{fs:.4f}[/bold]")
+        )
+        for mode in ("stable", "toppling", "sliding"):
+            ids = r[f"{mode}_blocks"]
+            out.print(f"{mode} blocks ({len(ids)}): " + (_ids(ids) if ids else "none"))
+        table = Table(
+            "block",
+            "y",
+            "W",
+            "P(n-1),t",
+            "P(n-1),s",
+            "P(n-1)",
+            "R",
+            "S",
+            "mode",
+            box=None,
+            pad_edge=False,
+        )
+        for row in reversed(r["blocks"]):
+            table.add_row(
+                str(row["block"]),
+                f"{row['height']:.4g}",
+                f"{row['weight']:.4g}",
+                _num(row["p_topple"], ".1f"),
+                _num(row["p_slide"], ".1f"),
+                f"{row['p_lower']:.1f}",
+                f"{row['normal']:.1f}",
+                f"{row['shear']:.1f}",
+                row["mode"],
+            )
+        out.print(table)

@@ -1,0 +1,196 @@
+"""Limit-equilibrium case files: which closed form to run, with its inputs.
+
+A case file is a small YAML (or TOML) file whose one section
+``limit_equilibrium`` names exactly one closed form and gives its arguments
+(the keyword arguments of the function, nothing guessed from a geometry)::
+
+    name: Hoek & Bray plane failure, crack filled
+    units: kN, m, kPa
+    limit_equilibrium:
+      plane_failure:
+        {height: 30, face_angle: 60, plane_dip: 30, friction_angle: 30,
+         cohesion: 48, unit_weight: 25.5, crack_distance: 9, water_depth: 14.8}
+
+``plane_failure`` takes the arguments of :func:`plane_failure`;
+``wedge`` those of :func:`two_block_wedge`; ``toppling`` those of
+:func:`toppling` with either ``heights`` or the regular slope's
+``n_blocks``, ``crest_block``, ``a1`` and ``a2`` (:func:`stepped_heights`,
+with ``step`` as ``b``).  ``name``, ``description`` and ``units`` are the
+only other keys.
+"""
+
+from __future__ import annotations
+
+import inspect
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..errors import InputError
+from .closed_forms import (
+    plane_failure,
+    stepped_heights,
+    toppling,
+    toppling_fos,
+    two_block_wedge,
+)
+
+__all__ = ["CASES", "is_case_document", "load_case", "run_case"]
+
+#: the closed forms a case file can name
+CASES = ("plane_failure", "toppling", "wedge")
+SECTION = "limit_equilibrium"
+OTHER_KEYS = ("name", "description", "units")
+_REGULAR = ("n_blocks", "crest_block", "a1", "a2")
+
+
+def is_case_document(data: Any) -> bool:
+    """Whether a parsed file is a limit-equilibrium case (has the section)."""
+    return isinstance(data, dict) and SECTION in data
+
+
+def load_case(path: str | Path) -> dict[str, Any]:
+    """Read a case file and run its closed form (see :func:`run_case`)."""
+    from ..config import read_document
+
+    data, _ = read_document(path)
+    return run_case(data, source=str(path))
+
+
+def _fail(source: str, key: str, problem: str, fix: str = "") -> InputError:
+    return InputError(f"{source}: {key}", problem, fix)
+
+
+def run_case(data: dict, *, source: str = "<case>") -> dict[str, Any]:
+    """Run the closed form a case document names.
+
+    Returns
+    -------
+    dict
+        ``case`` (the closed form), ``inputs`` and ``result`` (JSON-ready).
+
+    Raises
+    ------
+    InputError
+        Naming the file and the key: an unknown key, a missing or bad value,
+        none or more than one closed form.
+    """
+    if not is_case_document(data):
+        raise _fail(source, SECTION, "is missing", f"give one of {', '.join(CASES)} under it")
+    for key in data:
+        if key != SECTION and key not in OTHER_KEYS:
+            raise _fail(
+                source,
+                str(key),
+                "is not a key of a limit-equilibrium case file",
+                f"use only {SECTION} (and {', '.join(OTHER_KEYS)})",
+            )
+    section = data[SECTION]
+    if not isinstance(section, dict) or len(section) != 1:
+        raise _fail(
+            source, SECTION, "must name exactly one closed form", f"one of {', '.join(CASES)}"
+        )
+    ((case, inputs),) = section.items()
+    where = f"{SECTION}.{case}"
+    if case not in CASES:
+        raise _fail(
+            source, where, "is not a closed form rockdem knows", f"use one of {', '.join(CASES)}"
+        )
+    if not isinstance(inputs, dict):
+        raise _fail(
+            source, where, "must be a mapping of its arguments", "see docs/limit-equilibrium.md"
+        )
+    func = {"plane_failure": plane_failure, "toppling": toppling, "wedge": two_block_wedge}[case]
+    allowed = set(inspect.signature(func).parameters)
+    if case == "toppling":
+        allowed |= set(_REGULAR)
+    for key in inputs:
+        if key not in allowed:
+            raise _fail(
+                source,
+                f"{where}.{key}",
+                "is not an argument of this closed form",
+                f"use {', '.join(sorted(allowed))}",
+            )
+    try:
+        if case == "plane_failure":
+            r = plane_failure(**inputs)
+            result = r.as_dict()
+        elif case == "wedge":
+            r = two_block_wedge(**inputs)
+            result = {"thrust": r.thrust, "fos": r.fos, "stable": r.thrust <= 0}
+        else:
+            result = _toppling_case(dict(inputs), source, where)
+    except TypeError as exc:  # a missing required argument
+        missing = [
+            p.name
+            for p in inspect.signature(func).parameters.values()
+            if p.default is inspect.Parameter.empty
+            and p.kind is p.KEYWORD_ONLY
+            and p.name not in inputs
+        ]
+        key = f"{where}.{missing[0]}" if missing else where
+        raise _fail(source, key, "is missing", "give it") from exc
+    except InputError as exc:
+        if exc.where.startswith(f"{source}: "):
+            raise
+        key = exc.where.replace(f"{'wedge' if case == 'wedge' else case} ", f"{where}.", 1)
+        raise _fail(source, key, exc.problem, exc.fix) from None
+    return {"case": case, "inputs": inputs, "result": result}
+
+
+def _toppling_case(inputs: dict, source: str, where: str) -> dict[str, Any]:
+    regular = [k for k in _REGULAR if k in inputs]
+    if "heights" in inputs and regular:
+        raise _fail(
+            source, f"{where}.heights", f"given with {', '.join(regular)}", "give one or the other"
+        )
+    if "heights" not in inputs:
+        missing = [k for k in _REGULAR if k not in inputs]
+        if missing:
+            raise _fail(
+                source,
+                f"{where}.{missing[0]}",
+                "is missing",
+                "give heights, or n_blocks, crest_block, a1, a2 (and step)",
+            )
+        values = [inputs.pop(k) for k in _REGULAR]
+        for key, value in zip(_REGULAR, values, strict=True):
+            if isinstance(value, bool) or not isinstance(value, (int, float)):
+                raise _fail(source, f"{where}.{key}", f"{value!r} is not a number", "give a number")
+        inputs["heights"] = stepped_heights(*values, inputs.get("step", 0.0)).tolist()
+    heights = inputs.get("heights")
+    if not isinstance(heights, list) or not all(
+        isinstance(h, (int, float)) and not isinstance(h, bool) for h in heights
+    ):
+        raise _fail(source, f"{where}.heights", "must be a list of numbers", "toe first")
+    t = toppling(**inputs)
+    fos = toppling_fos(**inputs)
+    rows = [
+        {
+            "block": i + 1,
+            "height": float(t.heights[i]),
+            "weight": float(t.weight[i]),
+            "p_topple": _finite(t.p_topple[i]),
+            "p_slide": _finite(t.p_slide[i]),
+            "p_lower": float(t.p_lower[i]),
+            "normal": float(t.normal[i]),
+            "shear": float(t.shear[i]),
+            "mode": t.mode[i],
+        }
+        for i in range(len(t.heights))
+    ]
+    return {
+        "support": t.support,
+        "stable": t.support <= 0,
+        "fos": fos,
+        "blocks": rows,
+        "stable_blocks": t.blocks("stable"),
+        "toppling_blocks": t.blocks("toppling"),
+        "sliding_blocks": t.blocks("sliding"),
+    }
+
+
+def _finite(x: float) -> float | None:
+    return float(x) if np.isfinite(x) else None
