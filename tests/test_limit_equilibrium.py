@@ -396,3 +396,22 @@ def test_le_bad_input_is_one_line_and_exit_2(tmp_path, text, fragment):
     lines = r.stderr.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("error: case.yaml: "), r.stderr
     assert fragment in lines[0] and "Traceback" not in r.stderr
+
+
+def test_report_has_the_limit_equilibrium_section(tmp_path):
+    from rockdem.report import write_report
+
+    model = two_block_wedge(35, 30)
+    path = write_report(model, tmp_path, animation=False, fos_options={"width": 0.002})
+    html = path.read_text()
+    assert 'id="limit-equilibrium"' in html
+    exact = wedge_fos(200, 75, 37, 27, 35, 30, 35)
+    assert f"<b>{exact:.4f}</b>" in html  # Sarma's factor, equal to Eq. 7's
+
+
+def test_report_says_why_there_is_no_factor_for_toppling(tmp_path):
+    from rockdem.report import write_report
+
+    path = write_report(toppling_block(30.0, 0.3, 2.0), tmp_path, animation=False)
+    html = path.read_text()
+    assert "No limit-equilibrium factor" in html and "rotates" in html

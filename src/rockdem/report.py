@@ -603,6 +603,10 @@ def write_report(
             f"<h3>Unstable blocks at F = {format_factor(failed.strength_factor)} (failure)</h3>",
             _unstable_table(failed, max_rows, u),
         ]
+    if fos is not None:
+        from .limit_equilibrium.report import html_section as le_section
+
+        sections += le_section(fos)
     sections += [
         '<h2 id="pictures">Pictures</h2>',
         *pics,
