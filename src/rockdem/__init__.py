@@ -37,7 +37,13 @@ _PUBLIC = {
 }
 
 
+#: public subpackages, also imported on first use (``rd.limit_equilibrium.sarma``)
+_MODULES = ("limit_equilibrium",)
+
+
 def __getattr__(name: str):
+    if name in _MODULES:
+        return import_module(f".{name}", __name__)
     if name in _PUBLIC:
         value = getattr(import_module(_PUBLIC[name], __name__), name)
         globals()[name] = value
@@ -46,7 +52,7 @@ def __getattr__(name: str):
 
 
 def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(_PUBLIC))
+    return sorted(set(globals()) | set(_PUBLIC) | set(_MODULES))
 
 
 __all__ = [
