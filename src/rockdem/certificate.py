@@ -5,9 +5,11 @@ Any equilibrium the DEM finds is a set of spring-point forces, normal
 (strengths divided by the factor), that balances the loads.  The linear
 program
 
-    maximise mu  subject to  B^T [-N; S] = mu f_ext,  the strength limits,
-                             0 <= mu <= MU_CAP
+    maximise mu  subject to  B^T [-N; S] + Bb^T [T; V] = mu f_ext,
+                             the strength limits,  0 <= mu <= MU_CAP
 
+(``T, V``: the axial and shear forces of the bolts' crossings, within
+their capacities; :mod:`rockdem.bolts`)
 finds the largest multiple ``mu`` of the loads that such a force field can
 carry (HiGHS, through SciPy).  If ``mu < load_factor`` no solver can find
 equilibrium there: a rigorous proof of failure.  ``mu >= load_factor``
@@ -76,6 +78,11 @@ def admissible_load(
     c, tan_phi, tensile = strength(springs, state, factor, system.model.settings.reduce_tensile)
     w = springs.weight
     op = sp.csr_array(asm.operator)
+    bolts = system.bolts
+    if bolts is not None:  # bolt forces are variables too, within their capacities
+        op_b = sp.csr_array(bolts.operator)
+        b_lo = np.concatenate([bolts.t_min, -bolts.v_max])
+        b_hi = np.concatenate([bolts.t_max, bolts.v_max])
     if region is not None:
         keep_block = np.asarray(region, dtype=bool) & ~system.blocks.fixed
         rows = np.sort(asm.dof[keep_block].ravel())
@@ -84,6 +91,12 @@ def admissible_load(
         keep = touch[springs.interface]
         pick = np.flatnonzero(np.repeat(keep, 2))
         op = op[pick][:, rows]
+        if bolts is not None:
+            ends = faces.block_a[bolts.interface], faces.block_b[bolts.interface]
+            near = keep_block[ends[0]] | keep_block[ends[1]]
+            op_b = op_b[np.flatnonzero(np.repeat(near, 2))][:, rows]
+            b_lo = b_lo[np.concatenate([near, near])]
+            b_hi = b_hi[np.concatenate([near, near])]
         f = f[rows]
         scale_rows = asm.dof_scale[rows]
         c, tan_phi, tensile, w = c[keep], tan_phi[keep], tensile[keep], w[keep]
@@ -95,24 +108,30 @@ def admissible_load(
     scale = sp.diags_array(scale_rows)  # unknowns are forces / f_scale
     # equilibrium rows (scaled forces and moments / length): -Bn^T N + Bs^T S - mu f = 0
     A_eq = sp.hstack([-(op[0::2].T), op[1::2].T], format="csr")
+    n_b = 0
+    if bolts is not None:  # + Ba^T T + Bv^T V (axial and shear forces of the crossings)
+        A_eq = sp.hstack([A_eq, op_b[0::2].T, op_b[1::2].T], format="csr")
+        n_b = len(b_lo)
     A_eq = sp.hstack([scale @ A_eq, sp.csr_array(-(f / f_scale)[:, None])], format="csr")
     eye = sp.eye_array(n, format="csr")
     T = sp.diags_array(tan_phi)
     # +S - tan N <= c w ;  -S - tan N <= c w   (forces scaled by f_scale)
     A_ub = sp.vstack(
         [
-            sp.hstack([-T, eye, sp.csr_array((n, 1))]),
-            sp.hstack([-T, -eye, sp.csr_array((n, 1))]),
+            sp.hstack([-T, eye, sp.csr_array((n, n_b + 1))]),
+            sp.hstack([-T, -eye, sp.csr_array((n, n_b + 1))]),
         ],
         format="csr",
     )
     b_ub = np.concatenate([c * w, c * w]) / f_scale
     lower_n = -tensile * w / f_scale
-    bounds = np.empty((2 * n + 1, 2))
+    bounds = np.empty((2 * n + n_b + 1, 2))
     bounds[:n] = np.column_stack([lower_n, np.full(n, np.inf)])
     bounds[n : 2 * n] = (-np.inf, np.inf)
-    bounds[2 * n] = (0.0, MU_CAP)
-    cost = np.zeros(2 * n + 1)
+    if n_b:
+        bounds[2 * n : 2 * n + n_b] = np.column_stack([b_lo, b_hi]) / f_scale
+    bounds[-1] = (0.0, MU_CAP)
+    cost = np.zeros(2 * n + n_b + 1)
     cost[-1] = -1.0
     from scipy.optimize import linprog  # 0.3 s to import: only when an LP is solved
 

@@ -17,7 +17,7 @@ from scipy.sparse.csgraph import connected_components
 
 from .linalg import factorize
 from .results import Analysis
-from .solver import Solve, System, residual
+from .solver import Solve, System, residual, tangent
 
 #: a block moves in the mechanism if its motion exceeds this share of the largest
 MECHANISM_SHARE = 0.01
@@ -39,7 +39,7 @@ def newton_mechanism(system: System, sol: Solve, state, load_factor, factor):
     if asm.n_dof == 0:
         return out, np.zeros(n_blocks, dtype=bool)
     resp, r = residual(system, sol.q, state, load_factor, factor)
-    J = asm.stiffness(resp.d_nn, resp.d_sn, resp.d_ss, 1e-6, system.K0)
+    J = tangent(system, resp, sol.q, 1e-6)
     try:
         d = factorize(J).solve(r)
     except RuntimeError:

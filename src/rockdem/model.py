@@ -14,6 +14,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from .blocks import Blocks
+from .bolts import Bolt
 from .errors import InputError
 from .joints import Joint
 
@@ -183,6 +184,8 @@ class Model:
     loads : Loads
     settings : Settings
     name : str
+    bolts : sequence of Bolt
+        Passive bolts and cables (:mod:`rockdem.bolts`).
 
     Examples
     --------
@@ -203,8 +206,10 @@ class Model:
     loads: Loads = field(default_factory=Loads)
     settings: Settings = field(default_factory=Settings)
     name: str = "model"
+    bolts: Sequence[Bolt] = ()
 
     def __post_init__(self) -> None:
+        object.__setattr__(self, "bolts", tuple(self.bolts))
         joints = (self.joints,) if isinstance(self.joints, Joint) else tuple(self.joints)
         if not joints:
             raise InputError("model joints", "no joint properties", "give at least one Joint")

@@ -94,7 +94,10 @@ def relax(
 
     def unbalanced(q_):
         dn, ds = asm.relative_displacement(q_)
-        return f - asm.internal_force(forces(springs, state.slip, strengths, dn, ds))
+        r_ = f - asm.internal_force(forces(springs, state.slip, strengths, dn, ds))
+        if system.bolts is not None:
+            r_ -= system.bolts.internal_force(q_)
+        return r_
 
     mass = np.asarray(abs(system.K0).sum(axis=1)).ravel()
     elastic = system.elastic_scale * max(load_factor, 1e-12)

@@ -6,6 +6,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .bolts import BoltResults, bolt_results
 from .relaxation import MECHANISM_TEXT
 from .solver import System
 from .spring_law import STATE_NAMES, SpringState, strength
@@ -213,6 +214,18 @@ class Analysis:
     def unstable_blocks(self) -> np.ndarray:
         """User ids of the blocks that move in the mechanism."""
         return self.system.blocks.ids[self.unstable]
+
+    @property
+    def bolts(self) -> BoltResults | None:
+        """Force in every bolt at every joint it crosses, at ``displacement``
+        (None without bolts)."""
+        system = self.system
+        if system.bolts is None:
+            return None
+        asm, free = system.assembly, ~system.blocks.fixed
+        q = np.zeros(asm.n_dof)
+        q[asm.dof[free].ravel()] = self.displacement[free].ravel()
+        return bolt_results(system.bolts, q)
 
     @property
     def failed_interfaces(self) -> np.ndarray:

@@ -28,6 +28,7 @@ import scipy.sparse as sp
 
 from .assembly import Assembly, build_assembly
 from .blocks import Blocks
+from .bolts import Crossings, place_bolts
 from .errors import InputError
 from .interfaces import Interfaces, assign_joints, check_held, find_interfaces
 from .linalg import Factorizer, factorize, norm
@@ -80,6 +81,8 @@ class System:
     lu0: object = field(default=None)
     #: one factorisation handle for all tangents (symbolic analysis reused)
     factorizer: Factorizer = field(default_factory=Factorizer)
+    #: bolt and cable crossings of the joints (rockdem.bolts), None without bolts
+    bolts: Crossings | None = None
 
     def __repr__(self) -> str:
         return (
@@ -105,6 +108,9 @@ def build_system(model: Model, f_block: np.ndarray | None = None) -> System:
     asm = build_assembly(blocks, faces, springs)
     n = springs.n_springs
     K0 = asm.stiffness(springs.kn, np.zeros(n), springs.ks)
+    bolts = place_bolts(model.bolts, blocks, faces, asm)
+    if bolts is not None:
+        K0.data += bolts.stiffness_data(np.column_stack([bolts.k_axial, bolts.k_shear]))
     if f_block is None:
         f_block = block_loads(blocks, model.loads)
     check_water_table(blocks, faces, model.loads)
@@ -127,7 +133,7 @@ def build_system(model: Model, f_block: np.ndarray | None = None) -> System:
             ) from exc
         u = lu0.solve(f_ext)
         elastic = float(np.max(np.abs(u / asm.dof_scale))) or 1.0
-    return System(model, blocks, faces, springs, asm, K0, f_block, f_ext, elastic, lu0)
+    return System(model, blocks, faces, springs, asm, K0, f_block, f_ext, elastic, lu0, bolts=bolts)
 
 
 @dataclass(frozen=True, eq=False)
@@ -156,7 +162,18 @@ def residual(system: System, q, state, load_factor, factor):
     dn, ds = asm.relative_displacement(q)
     resp = evaluate(system.springs, state, dn, ds, factor, system.model.settings.reduce_tensile)
     r = load_factor * system.f_ext - asm.internal_force(resp.force)
+    if system.bolts is not None:
+        r -= system.bolts.internal_force(q)
     return resp, r
+
+
+def tangent(system: System, resp: Response, q, shift: float = 0.0) -> sp.csc_array:
+    """Consistent tangent of the springs (and bolts) at ``q``, plus ``shift x K0``."""
+    J = system.assembly.stiffness(resp.d_nn, resp.d_sn, resp.d_ss, shift, system.K0)
+    if system.bolts is not None:
+        _, d_bolt, _ = system.bolts.forces(q)
+        J.data += system.bolts.stiffness_data(d_bolt)
+    return J
 
 
 def _lu(system, J):
@@ -189,7 +206,7 @@ def _newton(system, state, load_factor, factor, q, max_it):
     for it in range(1, max_it + 1):
         if merit <= tol:
             return Solve(True, q, resp, it - 1, history, "converged", direction)
-        lu = _lu(system, asm.stiffness(resp.d_nn, resp.d_sn, resp.d_ss, beta, system.K0))
+        lu = _lu(system, tangent(system, resp, q, beta))
         if lu is None:
             beta *= 10.0
             if beta > BETA_MAX:

@@ -45,6 +45,7 @@ from .parse import TOML_SUFFIXES as TOML_SUFFIXES
 from .parse import load_model, parse_model, read_document
 from .parse import parse_document as parse_document
 from .sections import BlockSpec as BlockSpec
+from .sections import BoltSpec as BoltSpec
 from .sections import JointLineSpec as JointLineSpec
 from .sections import JointSetSpec as JointSetSpec
 from .sections import JointSpec as JointSpec

@@ -81,6 +81,19 @@ def _loads(cfg: ModelFile, names: dict[str, Loc]):
     )
 
 
+def _bolts(cfg: ModelFile, names: dict[str, Loc]):
+    from ..bolts import Bolt
+
+    bolts = []
+    for i, b in enumerate(cfg.bolts):
+        name = b.name or _keypath(("bolts", i))
+        names[f"bolts {name}"] = ("bolts", i)
+        fields = b.model_dump(exclude={"name", "bond_strength"})
+        bond = np.inf if b.bond_strength is None else b.bond_strength
+        bolts.append(Bolt(**fields, bond_strength=bond, name=name))
+    return tuple(bolts)
+
+
 def _settings(cfg: ModelFile):
     from ..model import Settings
 
@@ -157,6 +170,8 @@ def build_model(
         from ..solver import build_system
 
         try:
+        if cfg.bolts:
+            model = model.replace(bolts=_bolts(cfg, names))
             build_system(model)  # interfaces, springs, loads on blocks: every input check
         except InputError:
             check_held(model.blocks)  # a singular stiffness: say which blocks nothing holds

@@ -21,8 +21,10 @@ from .values import (
     Integer,
     Length,
     Magnitude,
+    NonNegative,
     Point,
     Polygon,
+    Positive,
     Seed,
     Seismic,
     Share,
@@ -287,5 +289,39 @@ class SupportSpec(_Section):
     angle: Direction
     """Direction in degrees counter-clockwise from +x (for example 165 pulls into a
     face looking toward +x, 15 degrees below horizontal)."""
+    name: str = ""
+    """Label reported with results."""
+
+
+class BoltSpec(_Section):
+    """A passive bolt or cable: a straight segment from its head on the face into
+    the rock, tying the blocks together at every joint it crosses (an axial and a
+    shear spring per crossing; forces per bolt, divided by `spacing` in the section)."""
+
+    head: Point
+    """Head of the bolt on the face `[x, y]`."""
+    angle: Direction
+    """Direction from the head into the rock, degrees counter-clockwise from +x (for
+    example 195 runs into a face looking toward +x, 15 degrees below horizontal)."""
+    length: Length
+    """Total length."""
+    capacity: Magnitude
+    """Axial yield force of the steel, one bolt."""
+    axial_stiffness: Stiffness
+    """Axial force per unit opening of a crossed joint along the bolt, one bolt (about
+    E A / L for a debonded length L each side of the joint)."""
+    shear_stiffness: NonNegative = 0.0
+    """Dowel stiffness across a joint, one bolt (0: none)."""
+    shear_capacity: NonNegative = 0.0
+    """Dowel (shear) capacity, one bolt."""
+    bond_strength: Positive | None = None
+    """Grout bond force per unit length: the axial capacity at a joint is at most the
+    bond over the length beyond it (null: the steel yields first)."""
+    pretension: NonNegative = 0.0
+    """Axial force locked in at installation."""
+    spacing: Positive = 1.0
+    """Out-of-plane spacing of the bolt row (the section carries force / spacing)."""
+    kind: Literal["bolt", "cable"] = "bolt"
+    """`cable`: no compression and no dowel action."""
     name: str = ""
     """Label reported with results."""

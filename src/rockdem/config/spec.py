@@ -14,6 +14,7 @@ from .sections import (
     BlockSpec,
     JointLineSpec,
     JointSpec,
+    BoltSpec,
     LoadsSpec,
     MaterialSpec,
     RemoveSpec,
@@ -65,7 +66,9 @@ class ModelFile(_Section):
     loads: LoadsSpec = LoadsSpec()
     """Self-weight, seismic coefficients, point and line loads."""
     supports: list[SupportSpec] = []
-    """Bolts and anchors."""
+    """Active supports: anchor forces of given magnitude and direction."""
+    bolts: list[BoltSpec] = []
+    """Passive bolts and cables: their force rises as the joints they cross move."""
     analysis: AnalysisSpec = AnalysisSpec()
     """Analysis settings."""
     stabilisation: StabilisationSpec = StabilisationSpec()

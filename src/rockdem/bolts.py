@@ -1,0 +1,355 @@
+"""Passive reinforcement: grouted bolts and cables as elasto-plastic elements.
+
+A bolt is a straight segment from its head (on the face) into the rock.
+Wherever it crosses an interface it ties the two blocks together with an
+axial and a shear spring at the crossing point (Lorig 1985, the model of
+UDEC's ``cable``/``rockbolt`` elements reduced to one spring pair per
+crossed joint):
+
+* axial force ``T = clip(P0 + k_a e_a, lower, T_max)`` on the extension
+  ``e_a`` of the bolt across the joint (``P0`` the pre-tension; ``lower`` is
+  ``-T_max`` for a bolt and 0 for a cable, which carries no compression);
+* shear (dowel) force ``V = clip(k_s e_s, -V_max, V_max)`` on the offset
+  across the joint (zero for a cable);
+* the axial capacity at a crossing is the smaller of the steel's
+  ``capacity`` and the grout bond over the length beyond the joint,
+  ``bond_strength x (length - depth)`` (the head side is held by the plate).
+
+Its force rises as the joint moves, which is how a passive bolt works (a
+prescribed force is :meth:`rockdem.model.PointLoad.anchor`).  Forces,
+stiffnesses and capacities are per bolt; the 2-D section carries them per
+unit width, divided by the out-of-plane ``spacing``.  Strength reduction
+does not reduce the steel (the factor of safety is the rock's).  The law is
+elastic-perfectly plastic on the total displacement (no unloading history:
+loads in rockdem only increase).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cached_property
+
+import numpy as np
+import scipy.sparse as sp
+import shapely
+
+from .errors import InputError
+
+KINDS = ("bolt", "cable")
+
+
+@dataclass(frozen=True)
+class Bolt:
+    """A passive bolt or cable.
+
+    Parameters
+    ----------
+    head : (x, y)
+        Head of the bolt, on the face.
+    angle : float
+        Direction from the head into the rock, degrees counter-clockwise
+        from +x (195 runs into a face that looks toward +x, 15 degrees below
+        horizontal).
+    length : float
+        Total length.
+    capacity : float
+        Axial yield force of the steel (one bolt).
+    axial_stiffness : float
+        Axial force per unit opening of a crossed joint along the bolt (one
+        bolt; about E A / L for a debonded length L each side of the joint).
+    shear_stiffness, shear_capacity : float
+        Dowel action across a joint (0: none; always none for a cable).
+    bond_strength : float
+        Grout bond force per unit length (inf: the steel yields first).
+    pretension : float
+        Axial force installed at zero displacement.
+    spacing : float
+        Out-of-plane spacing of the bolt row (forces per unit width = per
+        bolt / spacing).
+    kind : {"bolt", "cable"}
+    name : str
+    """
+
+    head: tuple[float, float]
+    angle: float
+    length: float
+    capacity: float
+    axial_stiffness: float
+    shear_stiffness: float = 0.0
+    shear_capacity: float = 0.0
+    bond_strength: float = np.inf
+    pretension: float = 0.0
+    spacing: float = 1.0
+    kind: str = "bolt"
+    name: str = ""
+
+    def __post_init__(self) -> None:
+        where = f"bolts {self.name}" if self.name else "bolts"
+        head = tuple(float(v) for v in np.asarray(self.head, dtype=float).ravel())
+        if len(head) != 2 or not np.all(np.isfinite(head)):
+            raise InputError(where, f"head {self.head!r} is not a point", "give [x, y]")
+        object.__setattr__(self, "head", head)
+        if self.kind not in KINDS:
+            raise InputError(where, f"kind {self.kind!r} is unknown", f"use one of {KINDS}")
+        positive = ("length", "capacity", "axial_stiffness", "spacing")
+        for key in positive:
+            v = getattr(self, key)
+            if not (np.isfinite(v) and v > 0):
+                raise InputError(where, f"{key} {v} is not positive", "give a value > 0")
+        for key in ("shear_stiffness", "shear_capacity", "pretension"):
+            v = getattr(self, key)
+            if not (np.isfinite(v) and v >= 0):
+                raise InputError(where, f"{key} {v} is negative or not finite", "use >= 0")
+        if not (self.bond_strength > 0) or np.isnan(self.bond_strength):
+            raise InputError(
+                where, f"bond_strength {self.bond_strength} is not positive", "give > 0"
+            )
+        if not np.isfinite(self.angle):
+            raise InputError(where, f"angle {self.angle} is not finite", "give degrees")
+        if self.pretension > self.capacity:
+            raise InputError(
+                where,
+                f"pretension {self.pretension:g} exceeds the capacity {self.capacity:g}",
+                "lock off below the yield force",
+            )
+
+    @property
+    def direction(self) -> np.ndarray:
+        a = np.radians(self.angle)
+        return np.array([np.cos(a), np.sin(a)])
+
+    @property
+    def end(self) -> np.ndarray:
+        return np.asarray(self.head) + self.length * self.direction
+
+
+@dataclass(frozen=True, eq=False, repr=False)
+class Crossings:
+    """Every bolt-joint crossing of a model, with its springs (per unit width).
+
+    ``B`` maps the free-dof displacements to ``(extension, offset)`` at each
+    crossing: the same kinematics as an interface's spring points with the
+    bolt's axis in place of the joint normal, so the 6 x 6 stiffness of a
+    crossing falls on its interface's place in the fixed sparsity pattern.
+    """
+
+    bolt: np.ndarray  # (m,) index into the model's bolt list
+    interface: np.ndarray  # (m,)
+    point: np.ndarray  # (m, 2)
+    axis: np.ndarray  # (m, 2) unit vector of the bolt (head -> rock)
+    depth: np.ndarray  # (m,) distance from the head
+    k_axial: np.ndarray
+    k_shear: np.ndarray
+    t_max: np.ndarray  # axial capacity at the crossing
+    t_min: np.ndarray  # -t_max (bolt) or 0 (cable)
+    v_max: np.ndarray
+    pretension: np.ndarray
+    spacing: np.ndarray  # to report forces per bolt
+    names: tuple[str, ...]
+    operator: sp.csr_array  # (2 m, n_dof)
+    gather: sp.csr_array  # (nnz of the pattern, 36 m)
+    B: np.ndarray  # (m, 2, 6), zero columns for fixed blocks
+
+    @property
+    def n(self) -> int:
+        return len(self.bolt)
+
+    @cached_property
+    def _operator_t(self) -> sp.csr_array:
+        return sp.csr_array(self.operator.T)
+
+    def displacement(self, q: np.ndarray) -> np.ndarray:
+        """``(extension, offset)`` at every crossing, shape (m, 2)."""
+        return (self.operator @ q).reshape(-1, 2)
+
+    def forces(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Axial and shear force per unit width (m, 2), tangent (m, 2) and
+        yielded flags (m,) at displacements ``q``."""
+        d = self.displacement(q)
+        t_trial = self.pretension + self.k_axial * d[:, 0]
+        v_trial = self.k_shear * d[:, 1]
+        t = np.clip(t_trial, self.t_min, self.t_max)
+        v = np.clip(v_trial, -self.v_max, self.v_max)
+        axial_elastic = (t_trial > self.t_min) & (t_trial < self.t_max)
+        shear_elastic = np.abs(v_trial) < self.v_max
+        tangent = np.column_stack(
+            [np.where(axial_elastic, self.k_axial, 0.0), np.where(shear_elastic, self.k_shear, 0.0)]
+        )
+        yielded = (t_trial >= self.t_max) | ((self.t_min < 0) & (t_trial <= self.t_min))
+        return np.column_stack([t, v]), tangent, yielded
+
+    def internal_force(self, q: np.ndarray) -> np.ndarray:
+        """The bolts' forces on the blocks' free dofs (resisting, like springs)."""
+        f, _, _ = self.forces(q)
+        return self._operator_t @ f.ravel()
+
+    def stiffness_data(self, tangent: np.ndarray) -> np.ndarray:
+        """``sum B^T D B`` of the crossings as values of the fixed pattern."""
+        K = np.einsum("mik,mi,mil->mkl", self.B, tangent, self.B)
+        return self.gather @ K.ravel()
+
+
+def place_bolts(bolts, blocks, faces, asm):
+    """The crossings of every bolt with the interfaces (None without bolts).
+
+    Raises InputError for a bolt whose head is not on the rock or that ties
+    no free block across any joint: it would hold nothing.
+    """
+    if not bolts:
+        return None
+    dof, scatter, n_nnz, n_dof = asm.dof, asm.scatter, asm.nnz, asm.n_dof
+    polys = blocks.polygons()
+    tree = shapely.STRtree(polys)
+    tol = blocks.tolerance
+    P0, P1 = faces.start, faces.end
+    rows: list[tuple] = []
+    names = []
+    for i, bolt in enumerate(bolts):
+        name = bolt.name or f"bolt {i + 1}"
+        names.append(name)
+        where = f"bolts {bolt.name}" if bolt.name else "bolts"
+        e = bolt.direction
+        head = np.asarray(bolt.head)
+        probe = shapely.points(head + 10 * tol * e)
+        if not len(tree.query(probe, predicate="intersects")):
+            raise InputError(
+                where,
+                f"the head ({head[0]:g}, {head[1]:g}) is not on the rock in the bolt's direction",
+                "put the head on the face and point the bolt into the rock",
+            )
+        r = bolt.length * e
+        s = P1 - P0
+        qp = P0 - head
+        denom = r[0] * s[:, 1] - r[1] * s[:, 0]
+        ok = np.abs(denom) > 1e-12 * bolt.length * np.hypot(*s.T)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            t = (qp[:, 0] * s[:, 1] - qp[:, 1] * s[:, 0]) / denom
+            u = (qp[:, 0] * r[1] - qp[:, 1] * r[0]) / denom
+        eps_t, eps_u = tol / bolt.length, tol / np.maximum(np.hypot(*s.T), tol)
+        hit = ok & (t > eps_t) & (t < 1 - eps_t) & (u >= -eps_u) & (u <= 1 + eps_u)
+        hit = np.flatnonzero(hit)
+        # a crossing through a corner touches several interfaces: keep one per depth
+        hit = hit[np.argsort(t[hit], kind="stable")]
+        keep = np.ones(len(hit), dtype=bool)
+        keep[1:] = np.diff(t[hit]) * bolt.length > tol
+        hit = hit[keep]
+        free = ~(blocks.fixed[faces.block_a[hit]] & blocks.fixed[faces.block_b[hit]])
+        hit = hit[free]
+        if not len(hit):
+            raise InputError(
+                where,
+                "crosses no joint between a free block and another block",
+                "lengthen it or change its angle so that it ties the moving rock to stable rock",
+            )
+        for k in hit:
+            depth = float(t[k] * bolt.length)
+            bond = bolt.bond_strength * (bolt.length - depth)
+            t_max = min(bolt.capacity, bond) / bolt.spacing
+            rows.append(
+                (
+                    i,
+                    int(k),
+                    head + depth * e,
+                    depth,
+                    bolt.axial_stiffness / bolt.spacing,
+                    0.0 if bolt.kind == "cable" else bolt.shear_stiffness / bolt.spacing,
+                    t_max,
+                    0.0 if bolt.kind == "cable" else -t_max,
+                    0.0 if bolt.kind == "cable" else bolt.shear_capacity / bolt.spacing,
+                    min(bolt.pretension / bolt.spacing, t_max),
+                    bolt.spacing,
+                )
+            )
+    cols = list(zip(*rows, strict=True))
+    bolt_idx = np.array(cols[0], dtype=np.int64)
+    iface = np.array(cols[1], dtype=np.int64)
+    point = np.array(cols[2], dtype=float).reshape(-1, 2)
+    axis = np.array([bolts[b].direction for b in bolt_idx]).reshape(-1, 2)
+    # kinematics in the interface's a -> b orientation: the axial row measures
+    # extension when the head lies on a's side (axis . normal > 0)
+    normal = faces.normal[iface]
+    v_axial = axis * np.sign(np.einsum("ij,ij->i", axis, normal))[:, None]
+    v_shear = np.column_stack([-v_axial[:, 1], v_axial[:, 0]])
+    a, b = faces.block_a[iface], faces.block_b[iface]
+    ra, rb = point - blocks.centroid[a], point - blocks.centroid[b]
+
+    def cross(r_, v):
+        return r_[:, 0] * v[:, 1] - r_[:, 1] * v[:, 0]
+
+    B = np.empty((len(iface), 2, 6))
+    for row, v in enumerate((v_axial, v_shear)):
+        B[:, row, 0:2] = -v
+        B[:, row, 2] = -cross(ra, v)
+        B[:, row, 3:5] = v
+        B[:, row, 5] = cross(rb, v)
+    columns = np.concatenate([dof[a], dof[b]], axis=1)
+    B[np.repeat(columns[:, None, :] < 0, 2, axis=1)] = 0.0
+    m = len(iface)
+    r_idx = np.repeat(np.arange(2 * m), 6)
+    c_idx = np.repeat(columns, 2, axis=0).ravel()
+    vals = B.reshape(-1)
+    valid = c_idx >= 0
+    operator = sp.csr_array((vals[valid], (r_idx[valid], c_idx[valid])), shape=(2 * m, n_dof))
+    places = scatter.reshape(-1, 36)[iface].ravel()
+    ok = places >= 0
+    gather = sp.csr_array(
+        (np.ones(int(ok.sum())), (places[ok], np.flatnonzero(ok))), shape=(n_nnz, 36 * m)
+    )
+    return Crossings(
+        bolt_idx,
+        iface,
+        point,
+        axis,
+        np.array(cols[3], dtype=float),
+        *(np.array(c, dtype=float) for c in cols[4:11]),
+        names=tuple(names),
+        operator=operator,
+        gather=gather,
+        B=B,
+    )
+
+
+@dataclass(frozen=True, eq=False, repr=False)
+class BoltResults:
+    """Per crossing of a bolt with a joint: forces per bolt and utilisation."""
+
+    name: np.ndarray  # bolt name
+    interface: np.ndarray
+    point: np.ndarray
+    depth: np.ndarray
+    extension: np.ndarray
+    offset: np.ndarray
+    axial_force: np.ndarray  # per bolt, tension positive
+    shear_force: np.ndarray
+    capacity: np.ndarray  # axial capacity at the crossing, per bolt
+    yielded: np.ndarray
+
+    @property
+    def utilisation(self) -> np.ndarray:
+        """Axial force over its capacity at the crossing."""
+        return np.abs(self.axial_force) / self.capacity
+
+    @property
+    def n(self) -> int:
+        return len(self.depth)
+
+
+def bolt_results(crossings: Crossings | None, q: np.ndarray) -> BoltResults | None:
+    """Bolt forces at free-dof displacements ``q`` (None without bolts)."""
+    if crossings is None:
+        return None
+    f, _, yielded = crossings.forces(q)
+    d = crossings.displacement(q)
+    per_bolt = crossings.spacing
+    return BoltResults(
+        np.asarray(crossings.names, dtype=object)[crossings.bolt],
+        crossings.interface,
+        crossings.point,
+        crossings.depth,
+        d[:, 0],
+        d[:, 1],
+        f[:, 0] * per_bolt,
+        f[:, 1] * per_bolt,
+        crossings.t_max * per_bolt,
+        yielded,
+    )

@@ -1,0 +1,154 @@
+"""Passive bolts and cables (rockdem.bolts) against closed forms.
+
+Block on a plane held by one bolt at angle theta to the plane (Hoek & Bray,
+Rock Slope Engineering, 3rd ed. 1981, ch. 7, reinforced plane failure; Wyllie
+& Mah 2004, section 6.5): once the bolt carries T,
+
+    FS = (c A + (W cos psi + T sin theta) tan phi) / (W sin psi - T cos theta).
+
+At the limit the block slides, the bolt stretches and yields, so T is its
+capacity: the steel's, or the grout bond beyond the joint when that is less.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import rockdem as rd
+from rockdem import verification as V
+from rockdem.bolts import Bolt, bolt_results
+from rockdem.errors import InputError
+from rockdem.joints import Joint
+
+PSI, PHI = 35.0, 30.0  # plane dip and friction: unbolted FS = tan30/tan35 = 0.8245
+WIDTH, HEIGHT, GAMMA = 4.0, 1.0, 25.0
+W = WIDTH * HEIGHT * GAMMA
+
+
+def bolted_fos(T, theta, cohesion=0.0, psi=PSI, phi=PHI):
+    p, s, t = np.radians([phi, psi, theta])
+    resist = cohesion * WIDTH + (W * np.cos(s) + T * np.sin(t)) * np.tan(p)
+    return resist / (W * np.sin(s) - T * np.cos(t))
+
+
+def block_with_bolt(theta=30.0, cohesion=0.0, shift=(0.0, 0.0), **bolt):
+    """The block's bolt runs from its top face, through the middle of its base,
+    2 m into the plane, at ``theta`` to the plane and pointing up-dip."""
+    # ductile cohesion (kept after yield), as limit equilibrium assumes
+    joint = Joint(
+        normal_stiffness=1e6, friction_angle=PHI, cohesion=cohesion, residual_cohesion=cohesion
+    )
+    m = V.block_on_plane(PSI, joint, width=WIDTH, height=HEIGHT, unit_weight=GAMMA)
+    R = V._rot(-PSI)
+    t = np.radians(theta)
+    head = R @ np.array([WIDTH / 2 + HEIGHT * np.cos(t) / np.sin(t), HEIGHT]) + shift
+    blocks = m.blocks
+    if any(shift):
+        blocks = rd.Blocks.from_polygons(
+            [blocks.outline(i) + shift for i in range(blocks.n_blocks)],
+            fixed=blocks.fixed,
+            unit_weight=GAMMA,
+        )
+    args = dict(
+        head=tuple(head),
+        angle=180.0 + theta - PSI,
+        length=HEIGHT / np.sin(t) + 2.0,
+        capacity=30.0,
+        axial_stiffness=1e4,
+    )
+    args.update(bolt)
+    return m.replace(blocks=blocks, bolts=[Bolt(**args)])
+
+
+@pytest.mark.parametrize(
+    ("theta", "T", "cohesion"), [(30.0, 30.0, 0.0), (60.0, 30.0, 0.0), (40.0, 15.0, 2.0)]
+)
+def test_bolted_block_on_plane_matches_closed_form(theta, T, cohesion):
+    fos = rd.factor_of_safety(block_with_bolt(theta, cohesion, capacity=T))
+    exact = bolted_fos(T, theta, cohesion)
+    assert fos.value == pytest.approx(exact, rel=0.005)
+    # the failure beyond it is proven with the bolt at its capacity in the LP
+    assert fos.failed_analysis.evidence.proof == "lp-certificate"
+
+
+def test_bond_limits_the_capacity_by_the_length_beyond_the_joint():
+    """2 m beyond the joint at 6 per unit length: 12 < the steel's 30."""
+    fos = rd.factor_of_safety(block_with_bolt(30.0, bond_strength=6.0))
+    assert fos.value == pytest.approx(bolted_fos(12.0, 30.0), rel=0.005)
+
+
+def test_bolt_carries_what_equilibrium_needs_below_its_capacity():
+    """At F = 1 the unbolted block slides (FS 0.82): the stretched bolt holds it
+    with exactly the force limit equilibrium needs, and is not yielded."""
+    model = block_with_bolt(30.0)
+    an = rd.analyse(model)
+    assert an.stable
+    p, s, t = np.radians([PHI, PSI, 30.0])
+    need = W * (np.sin(s) - np.cos(s) * np.tan(p)) / (np.cos(t) + np.sin(t) * np.tan(p))
+    res = an.bolts
+    assert res.n == 1
+    assert res.axial_force[0] == pytest.approx(need, rel=1e-3)
+    assert not res.yielded[0]
+    assert res.utilisation[0] == pytest.approx(need / 30.0, rel=1e-3)
+
+
+def test_pretension_acts_at_once_like_an_anchor_force():
+    """A stiff-less pre-tensioned cable is a constant force: FS with T = P0."""
+    model = block_with_bolt(30.0, pretension=20.0, axial_stiffness=1e-6, kind="cable")
+    fos = rd.factor_of_safety(model)
+    assert fos.value == pytest.approx(bolted_fos(20.0, 30.0), rel=0.005)
+
+
+def test_cable_carries_no_compression():
+    """Pointing down-dip, sliding shortens the cable: it adds nothing, FS = tan phi / tan psi."""
+    model = block_with_bolt(30.0, kind="cable")
+    b = model.bolts[0]
+    # the same bolt line turned to point down-dip: through the base from the other side
+    R = V._rot(-PSI)
+    t = np.radians(30.0)
+    head = R @ np.array([WIDTH / 2 - HEIGHT * np.cos(t) / np.sin(t), HEIGHT])
+    flipped = Bolt(**{**b.__dict__, "head": tuple(head), "angle": -30.0 - PSI})
+    fos = rd.factor_of_safety(model.replace(bolts=[flipped]))
+    exact = np.tan(np.radians(PHI)) / np.tan(np.radians(PSI))
+    assert fos.value == pytest.approx(exact, rel=0.005)
+
+
+def test_spacing_divides_the_force_per_unit_width():
+    """A 60-capacity bolt every 2 m equals a 30-capacity bolt every metre."""
+    fos = rd.factor_of_safety(block_with_bolt(30.0, capacity=60.0, spacing=2.0))
+    assert fos.value == pytest.approx(bolted_fos(30.0, 30.0), rel=0.005)
+
+
+def test_translation_changes_nothing():
+    """Moving the model and the bolt together by (1e5, -3e4) gives the same FS and force."""
+    a = rd.factor_of_safety(block_with_bolt(30.0))
+    b = rd.factor_of_safety(block_with_bolt(30.0, shift=(1e5, -3e4)))
+    assert b.value == pytest.approx(a.value, rel=1e-6)
+    fa = rd.analyse(block_with_bolt(30.0)).bolts.axial_force
+    fb = rd.analyse(block_with_bolt(30.0, shift=(1e5, -3e4))).bolts.axial_force
+    np.testing.assert_allclose(fb, fa, rtol=1e-6)
+
+
+def test_bolt_results_report_every_crossing():
+    model = block_with_bolt(30.0)
+    system = rd.build_system(model)
+    res = bolt_results(system.bolts, np.zeros(system.assembly.n_dof))
+    assert res.n == 1
+    assert res.depth[0] == pytest.approx(HEIGHT / np.sin(np.radians(30.0)), rel=1e-9)
+    assert res.axial_force[0] == 0.0
+
+
+@pytest.mark.parametrize(
+    ("change", "message"),
+    [
+        (dict(head=(50.0, 50.0)), "is not on the rock"),
+        (dict(length=0.5), "crosses no joint"),
+        (dict(capacity=-1.0), "capacity -1.0 is not positive"),
+        (dict(pretension=40.0), "exceeds the capacity"),
+        (dict(kind="rope"), "kind 'rope' is unknown"),
+    ],
+)
+def test_bad_bolts_are_refused_with_a_reason(change, message):
+    with pytest.raises(InputError, match=message):
+        rd.build_system(block_with_bolt(30.0, **change))
