@@ -35,6 +35,7 @@ _PUBLIC = {
     "Analysis": ".results",
     "FactorOfSafety": ".results",
     "build_system": ".solver",
+    "study": ".studies.run",
 }
 
 
@@ -73,4 +74,5 @@ __all__ = [
     "analyse",
     "build_system",
     "factor_of_safety",
+    "study",
 ]

@@ -10,6 +10,7 @@ from typing import Literal
 from pydantic import Field, field_validator, model_validator
 from pydantic_core import PydanticCustomError
 
+from ..studies.spec import StudySpec
 from .sections import (
     BlockSpec,
     JointLineSpec,
@@ -74,6 +75,9 @@ class ModelFile(_Section):
     stabilisation: StabilisationSpec = StabilisationSpec()
     """Stabilisation design (`rockdem stabilise`): target factor of safety, berm,
     support, removal trials and excavation stages."""
+    study: StudySpec | None = None
+    """Probabilistic or parametric study (`rockdem study`): inputs varied by key
+    path, their distributions or sweep values, the sampler and the number of runs."""
 
     @field_validator("joints", "materials")
     @classmethod
