@@ -152,3 +152,87 @@ def test_bolt_results_report_every_crossing():
 def test_bad_bolts_are_refused_with_a_reason(change, message):
     with pytest.raises(InputError, match=message):
         rd.build_system(block_with_bolt(30.0, **change))
+
+
+# ------------------------------------------------- model file, command line
+def test_bolted_example_holds_the_toppling_columns():
+    """examples/bolted-slope.yaml states: stable, bolts below 20% of capacity,
+    FS ~ 1.24 = tan30/tan25 (planar sliding of crest blocks 40, 45, 50), proven."""
+    from rockdem.config import load_model
+    from rockdem.examples import example_path
+
+    model, _ = load_model(example_path("bolted-slope"))
+    assert len(model.bolts) == 4
+    an = rd.analyse(model)
+    assert an.stable
+    assert an.bolts.utilisation.max() < 0.2
+    assert set(np.unique(an.bolts.name)) == {"B1", "B2", "B3", "B4"}
+    fos = rd.factor_of_safety(model)
+    planar = np.tan(np.radians(30)) / np.tan(np.radians(25))
+    assert 1.22 < fos.value < 1.26
+    assert fos.value == pytest.approx(planar, rel=0.005)
+    assert fos.failed_analysis.evidence.proof == "lp-certificate"
+    assert set(fos.failed_analysis.unstable_blocks) == {40, 45, 50}
+
+
+def test_run_writes_the_bolt_table(tmp_path):
+    import csv
+    import json
+
+    from typer.testing import CliRunner
+
+    from rockdem.cli import app
+
+    out = tmp_path / "res"
+    res = CliRunner().invoke(app, ["run", "--example", "bolted-slope", "--out", str(out)])
+    assert res.exit_code == 0, res.output
+    assert "B1: crosses 8 joints" in res.output
+    with (out / "bolts.csv").open() as fh:
+        rows = list(csv.DictReader(fh))
+    assert len(rows) == 29
+    assert "axial_force [t]" in rows[0]
+    doc = json.loads((out / "result.json").read_text())
+    assert [b["bolt"] for b in doc["bolt_summary"]] == ["B1", "B2", "B3", "B4"]
+    assert len(doc["bolts"]) == 29
+    assert doc["column_units"]["bolts"]["axial_force"] == "t"
+
+
+BOLTED_BOX = """
+units: kN, m, kPa
+joints:
+  rock: {normal_stiffness: 1.0e+6, friction_angle: 30}
+blocks:
+  - {vertices: [[-5, -1], [5, -1], [5, 0], [-5, 0]], fixed: true}
+  - {vertices: [[0, 0], [1, 0], [1, 1], [0, 1]], unit_weight: 25}
+bolts:
+  - {head: [0.5, 1.0], angle: 270, length: 2, capacity: 50, axial_stiffness: 1.0e+4}
+"""
+
+
+@pytest.mark.parametrize(
+    ("change", "where", "message"),
+    [
+        ("length: 2", "bolts[0]:", "crosses no joint"),
+        ("head: [0.5, 1.0]", "bolts[0]:", "is not on the rock"),
+        ("capacity: 50", "bolts[0].capacity:", "-5 is out of range"),
+        ("angle: 270", "bolts[0].kind:", "use 'bolt' or 'cable'"),
+    ],
+)
+def test_bad_bolt_in_a_file_is_one_line_and_exit_2(tmp_path, change, where, message):
+    from typer.testing import CliRunner
+
+    from rockdem.cli import EXIT_INPUT, app
+
+    bad = {
+        "length: 2": "length: 0.5",
+        "head: [0.5, 1.0]": "head: [3.0, 4.0]",
+        "capacity: 50": "capacity: -5",
+        "angle: 270": "angle: 270, kind: rope",
+    }[change]
+    path = tmp_path / "m.yaml"
+    path.write_text(BOLTED_BOX.replace(change, bad))
+    res = CliRunner().invoke(app, ["run", str(path)])
+    assert res.exit_code == EXIT_INPUT
+    lines = [ln for ln in res.output.splitlines() if ln.strip()]
+    assert len(lines) == 1, res.output
+    assert where in lines[0] and message in lines[0]

@@ -36,6 +36,8 @@ import shapely
 from .errors import InputError
 
 KINDS = ("bolt", "cable")
+#: the rock must start within this share of the bolt's length from its head
+HEAD_REACH = 0.01
 
 
 @dataclass(frozen=True)
@@ -210,7 +212,8 @@ def place_bolts(bolts, blocks, faces, asm):
         where = f"bolts {bolt.name}" if bolt.name else "bolts"
         e = bolt.direction
         head = np.asarray(bolt.head)
-        probe = shapely.points(head + 10 * tol * e)
+        # the head may sit a little off the face (rounded coordinates): 1% of the length
+        probe = shapely.points(head + max(10 * tol, HEAD_REACH * bolt.length) * e)
         if not len(tree.query(probe, predicate="intersects")):
             raise InputError(
                 where,

@@ -23,6 +23,11 @@ over the shear stress (``inf`` where unstressed).  In ``springs.csv``,
 ``capacity`` is the full shear strength (F = 1) and ``strength_at_factor``
 the strength at the factor the stresses were found at.  ``failure_mode`` (in
 ``blocks.csv``) is the block's mode at the limit (:mod:`rockdem.modes`).
+``bolts.csv`` has a row per joint a bolt crosses (:mod:`rockdem.bolts`):
+``extension`` and ``offset`` of the bolt across the joint, ``axial_force``
+(tension positive) and ``shear_force`` per bolt, ``axial_capacity`` there
+(steel or bond beyond the joint), ``utilisation`` (axial force / capacity)
+and ``yielded``; only its heading without bolts.
 
 When the model's ``units`` note names a system (:func:`rockdem.units.parse_units`:
 "kN, m, kPa", "t, m, t/m^2", ...) every CSV heading with a unit carries it in
@@ -53,12 +58,13 @@ from .spring_law import STATE_NAMES
 from .trust import trust_statements
 
 #: The files :func:`write_results` writes.
-RESULT_FILES = ("blocks.csv", "interfaces.csv", "springs.csv", "result.json")
+RESULT_FILES = ("blocks.csv", "interfaces.csv", "springs.csv", "bolts.csv", "result.json")
 
 __all__ = [
     "RESULT_FILES",
     "analysis_summary",
     "analysis_tables",
+    "bolt_summary",
     "check_output_dir",
     "column_units",
     "csv_header",
@@ -187,7 +193,38 @@ def analysis_tables(analysis, modes=None) -> dict[str, list[dict[str, Any]]]:
         }
         for k in range(len(s.sigma))
     ]
-    return {"blocks": blocks, "interfaces": interfaces, "springs": springs}
+    return {
+        "blocks": blocks,
+        "interfaces": interfaces,
+        "springs": springs,
+        "bolts": bolt_rows(analysis),
+    }
+
+
+def bolt_rows(analysis) -> list[dict[str, Any]]:
+    """One row per joint a bolt crosses: force per bolt, capacity there,
+    utilisation and whether it yielded (empty without bolts)."""
+    r = analysis.bolts
+    if r is None:
+        return []
+    use = r.utilisation
+    return [
+        {
+            "bolt": str(r.name[k]),
+            "interface": int(r.interface[k]),
+            "x": float(r.point[k, 0]),
+            "y": float(r.point[k, 1]),
+            "depth": float(r.depth[k]),
+            "extension": float(r.extension[k]),
+            "offset": float(r.offset[k]),
+            "axial_force": float(r.axial_force[k]),
+            "shear_force": float(r.shear_force[k]),
+            "axial_capacity": float(r.capacity[k]),
+            "utilisation": float(use[k]),
+            "yielded": bool(r.yielded[k]),
+        }
+        for k in range(r.n)
+    ]
 
 
 def _failed(analysis) -> list[dict[str, Any]]:
@@ -206,6 +243,27 @@ def _failed(analysis) -> list[dict[str, Any]]:
         }
         for i in analysis.failed_interfaces
     ]
+
+
+def bolt_summary(analysis) -> list[dict[str, Any]]:
+    """Per bolt: the joints it crosses, its largest axial force (per bolt), the
+    largest utilisation and how many of its crossings have yielded."""
+    if analysis is None or analysis.bolts is None:
+        return []
+    r = analysis.bolts
+    out = []
+    for name in dict.fromkeys(r.name):
+        k = r.name == name
+        out.append(
+            {
+                "bolt": str(name),
+                "crossings": int(k.sum()),
+                "max_axial_force": float(np.max(r.axial_force[k])),
+                "max_utilisation": float(np.max(r.utilisation[k])),
+                "yielded_crossings": int(r.yielded[k].sum()),
+            }
+        )
+    return out
 
 
 def state_counts(analysis) -> dict[str, dict[str, int]]:
@@ -261,7 +319,7 @@ def analysis_summary(analysis) -> dict[str, Any]:
     current state and first failure), ``interface_states`` (counts by current
     state and by history, see :func:`state_counts`), ``failure_modes``,
     ``boundary_contacts`` and ``warnings`` (:func:`mechanism_summary`),
-    ``slip_surface`` (interface numbers),
+    ``slip_surface`` (interface numbers), ``bolt_summary`` (:func:`bolt_summary`),
     ``steps`` and ``evidence``.
     """
     return jsonable(
@@ -275,6 +333,7 @@ def analysis_summary(analysis) -> dict[str, Any]:
             "interface_states": state_counts(analysis),
             **mechanism_summary(analysis),
             "slip_surface": [int(i) for i in analysis.slip_surface],
+            "bolt_summary": bolt_summary(analysis),
             "steps": [
                 {
                     "stage": s.stage,
@@ -301,7 +360,8 @@ def fos_summary(fos) -> dict[str, Any]:
     ``mechanism_blocks`` are the blocks moving at the unstable end (the strength
     factor of that state: ``mechanism_factor``), with their
     ``failure_modes``, ``boundary_contacts`` and ``warnings``
-    (:func:`mechanism_summary`).
+    (:func:`mechanism_summary`); ``bolts_at_limit``: the bolts in the last
+    equilibrium below the limit (:func:`bolt_summary`).
     """
     failed, base = fos.failed_analysis, fos.stable_analysis
     return jsonable(
@@ -316,6 +376,7 @@ def fos_summary(fos) -> dict[str, Any]:
             "definition": fos.definition,
             "mechanism_blocks": [] if failed is None else [int(i) for i in failed.unstable_blocks],
             "mechanism_factor": None if failed is None else failed.strength_factor,
+            "bolts_at_limit": bolt_summary(base),
             **mechanism_summary(failed),
             "trials": [
                 {
@@ -357,7 +418,8 @@ def check_output_dir(folder: str | Path, *, overwrite: bool = False) -> Path:
 COLUMN_QUANTITY = {
     **dict.fromkeys("area area_removed removed_area total_area_removed free_area".split(), "area"),
     **dict.fromkeys(
-        "weight water_fx water_fy normal_force shear_force support_force free_weight force".split(),
+        "weight water_fx water_fy normal_force shear_force support_force free_weight force "
+        "axial_force axial_capacity".split(),
         "force",
     ),
     **dict.fromkeys(
@@ -365,9 +427,9 @@ COLUMN_QUANTITY = {
         "stress",
     ),
     **dict.fromkeys(
-        "centroid_x centroid_y start_x start_y end_x end_y x y length".split(), "length"
+        "centroid_x centroid_y start_x start_y end_x end_y x y length depth".split(), "length"
     ),
-    **dict.fromkeys("ux uy".split(), "displacement"),
+    **dict.fromkeys("ux uy extension offset".split(), "displacement"),
     "unit_weight": "unit_weight",
 }
 
@@ -438,6 +500,10 @@ def write_results(
     *,
     overwrite: bool = False,
     units=None,
+    "bolts": list(
+        "bolt interface x y depth extension offset axial_force shear_force axial_capacity "
+        "utilisation yielded".split()
+    ),
 ) -> list[Path]:
     """Write the result files into ``folder``, all or nothing.
 
@@ -470,13 +536,13 @@ def write_results(
     os.umask(umask)
     os.chmod(tmp, 0o777 & ~umask)  # mkdtemp makes it private; the results are not
     try:
-        for name in ("blocks", "interfaces", "springs"):
-            _write_csv(tmp / f"{name}.csv", tables[name], _COLUMNS[name], units)
+        for name in ("blocks", "interfaces", "springs", "bolts"):
+            _write_csv(tmp / f"{name}.csv", tables.get(name, []), _COLUMNS[name], units)
         doc = dict(document)
         if units is not None and units.known:
             doc["column_units"] = {
                 name: column_units(_COLUMNS[name], units)
-                for name in ("blocks", "interfaces", "springs")
+                for name in ("blocks", "interfaces", "springs", "bolts")
             }
         doc.update(tables)
         with (tmp / "result.json").open("w", encoding="utf-8") as fh:
