@@ -490,6 +490,10 @@ _COLUMNS = {
         "interface point x y sigma tau pore_pressure capacity strength_at_factor state "
         "current_state first_failure local_fos".split()
     ),
+    "bolts": list(
+        "bolt interface x y depth extension offset axial_force shear_force axial_capacity "
+        "utilisation yielded".split()
+    ),
 }
 
 
@@ -500,10 +504,6 @@ def write_results(
     *,
     overwrite: bool = False,
     units=None,
-    "bolts": list(
-        "bolt interface x y depth extension offset axial_force shear_force axial_capacity "
-        "utilisation yielded".split()
-    ),
 ) -> list[Path]:
     """Write the result files into ``folder``, all or nothing.
 

@@ -155,6 +155,7 @@ def _print_run(doc: dict[str, Any], result) -> None:
         out.print(table)
         if len(failed) > 30:
             out.print(f"... and {len(failed) - 30} more (see interfaces.csv with --out)")
+    _print_bolts(doc, "bolt_summary", "bolts")
     if not doc["stable"] and doc["slip_surface"]:
         r = result.interfaces
         parts = [
@@ -163,6 +164,24 @@ def _print_run(doc: dict[str, Any], result) -> None:
         ]
         more = len(doc["slip_surface"]) - len(parts)
         out.print("slip surface: " + ", ".join(parts) + (f", ... ({more} more)" if more else ""))
+
+
+def _print_bolts(doc: dict[str, Any], key: str, title: str) -> None:
+    """One line per bolt: its largest force, utilisation and yielded crossings."""
+    bolts = doc[key]
+    if not bolts:
+        return
+    unit = (doc.get("unit_system") or {}).get("force")
+    unit = f" {unit}" if unit else ""
+    out.print(f"{title} (force per bolt):")
+    for b in bolts:
+        yielded = b["yielded_crossings"]
+        state = f", yielded at {_plural(yielded, 'joint')}" if yielded else ""
+        out.print(
+            f"  {escape(b['bolt'])}: crosses {_plural(b['crossings'], 'joint')}, largest axial "
+            f"force {b['max_axial_force']:.4g}{unit} ({100 * b['max_utilisation']:.0f}% of capacity"
+            f"{state})"
+        )
 
 
 #: current states in words (rockdem.results.CURRENT_NAMES -> CURRENT_LABELS)
@@ -210,7 +229,6 @@ def fos(
 ) -> None:
     """Factor of safety by shear strength reduction: the value and its bracket.
 
-    _print_bolts(doc, "bolt_summary", "bolts")
     With --out the tables describe the last equilibrium (the stable end of the
     bracket), except the blocks' failure_mode: the mode at the limit (the
     failed end); result.json also lists the blocks moving at the unstable end.
@@ -221,24 +239,6 @@ def fos(
 
         # the progress hooks are looked up on the package at call time, so that
         # rockdem.cli._step_hook and rockdem.cli._trial_hook stay patchable
-def _print_bolts(doc: dict[str, Any], key: str, title: str) -> None:
-    """One line per bolt: its largest force, utilisation and yielded crossings."""
-    bolts = doc[key]
-    if not bolts:
-        return
-    unit = (doc.get("unit_system") or {}).get("force")
-    unit = f" {unit}" if unit else ""
-    out.print(f"{title} (force per bolt):")
-    for b in bolts:
-        yielded = b["yielded_crossings"]
-        state = f", yielded at {_plural(yielded, 'joint')}" if yielded else ""
-        out.print(
-            f"  {escape(b['bolt'])}: crosses {_plural(b['crossings'], 'joint')}, largest axial "
-            f"force {b['max_axial_force']:.4g}{unit} ({100 * b['max_utilisation']:.0f}% of capacity"
-            f"{state})"
-        )
-
-
         from . import _trial_hook
 
         path, m, cfg = _load(model, example)
@@ -290,5 +290,5 @@ def _print_fos(doc: dict[str, Any]) -> None:
         at = format_factor(doc["mechanism_factor"])
         out.print(f"mechanism blocks ({len(blocks)}, failed state at F = {at}): {_ids(blocks)}")
     _print_mechanism(doc)
-    out.print(f"definition: {escape(doc['definition'])}")
     _print_bolts(doc, "bolts_at_limit", "bolts at the last equilibrium below the limit")
+    out.print(f"definition: {escape(doc['definition'])}")

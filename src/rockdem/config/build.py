@@ -166,12 +166,12 @@ def build_model(
             model = _explicit_model(cfg, joints, loads, settings, name, ids)
         else:
             model = _slope_model(cfg, joints, loads, settings, name, max_blocks)
+        if cfg.bolts:
+            model = model.replace(bolts=_bolts(cfg, names))
         _check_free(model, cfg, source, nodes)
         from ..solver import build_system
 
         try:
-        if cfg.bolts:
-            model = model.replace(bolts=_bolts(cfg, names))
             build_system(model)  # interfaces, springs, loads on blocks: every input check
         except InputError:
             check_held(model.blocks)  # a singular stiffness: say which blocks nothing holds
