@@ -393,6 +393,7 @@ def write_report(
     animation: bool = True,
     block_ids: bool | None = None,
     max_rows: int = 200,
+    study=None,
 ) -> Path:
     """Write one self-contained HTML report of a model's analysis.
 
@@ -430,6 +431,9 @@ def write_report(
         Label blocks in the model picture (default: if there are <= 60).
     max_rows : int
         Longest table of failed joints / unstable blocks.
+    study : StudyResult or path, optional
+        A probabilistic or parametric study (:func:`rockdem.study`, or its
+        ``--out`` folder): adds a section with its summary and pictures.
 
     Returns
     -------
@@ -607,6 +611,10 @@ def write_report(
         from .limit_equilibrium.report import html_section as le_section
 
         sections += le_section(fos)
+    if study is not None:
+        from .studies.report import html_section
+
+        sections += html_section(study, fig)
     sections += [
         '<h2 id="pictures">Pictures</h2>',
         *pics,

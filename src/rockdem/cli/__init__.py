@@ -81,6 +81,7 @@ from .le import le as le
 from .model_files import example_copy as example_copy
 from .model_files import example_list as example_list
 from .model_files import schema as schema
+from .study import study as _study
 
 # ---------------------------------------------------------------- commands
 # registered here, in the order `rockdem --help` lists them
@@ -90,6 +91,7 @@ app.command()(fos)
 app.command()(le)
 app.command()(report)
 app.command()(plot)
+app.command("study")(_study)
 app.command()(schema)
 example_app.command("list")(example_list)
 example_app.command("copy")(example_copy)

@@ -10,7 +10,6 @@ from typing import Literal
 from pydantic import Field, field_validator, model_validator
 from pydantic_core import PydanticCustomError
 
-from ..studies.spec import StudySpec
 from .sections import (
     BlockSpec,
     JointLineSpec,
@@ -23,6 +22,7 @@ from .sections import (
     SupportSpec,
 )
 from .settings import AnalysisSpec, StabilisationSpec
+from .study import StudySpec
 from .values import _Section
 
 #: Version of the file format this module reads (the ``format`` key).

@@ -1,0 +1,535 @@
+"""Probabilistic and parametric studies (rockdem.study, `rockdem study`).
+
+The closed form: a block on a plane dipping psi with a normally distributed
+friction angle phi fails iff tan(phi) < tan(psi), so P(FS < 1) =
+Phi((psi - mean) / sd).  Monte Carlo must find it within its confidence
+interval; Latin hypercube, with one input, within 1/n (one sample per stratum:
+only the stratum holding the limit can be misjudged), with 5x fewer samples.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+from scipy import stats
+from typer.testing import CliRunner
+
+import rockdem
+from rockdem.cli import app
+from rockdem.config import load_model
+from rockdem.studies import sampling
+from rockdem.studies.run import prepare
+from rockdem.studies.spec import StudySpec
+from rockdem.studies.stats import pf_interval
+from rockdem.verification import sliding_fos
+
+pytest.importorskip("pandas")
+pytest.importorskip("pyarrow")
+
+runner = CliRunner()
+PSI = 30.0  # dip of the plane
+PHI = "joints.plane.friction_angle"
+VOLATILE = ["seconds", "worker"]
+
+
+def plane_document(dip: float = PSI) -> dict:
+    """A 2 x 1 block on a fixed plane dipping ``dip`` toward +x (as the parsed file)."""
+    d = np.radians(-dip)
+    R = np.array([[np.cos(d), -np.sin(d)], [np.sin(d), np.cos(d)]])
+    ground = np.array([(-8, -1), (8, -1), (8, 0), (-8, 0)]) @ R.T
+    block = np.array([(0, 0), (2, 0), (2, 1), (0, 1)]) @ R.T
+    return {
+        "name": "block on a plane",
+        "units": "kN, m, kPa",
+        "materials": {"rock": {"unit_weight": 25}},
+        "joints": {"plane": {"normal_stiffness": 1.0e6, "friction_angle": 33}},
+        "blocks": [
+            {"fixed": True, "vertices": ground.tolist()},
+            {"material": "rock", "vertices": block.tolist()},
+        ],
+    }
+
+
+def normal_phi(**kw) -> dict:
+    return {"inputs": {PHI: {"distribution": "normal", "mean": 33, "sd": 2.5}}, **kw}
+
+
+def write_model(folder: Path, study: dict | None, name: str = "plane.yaml") -> Path:
+    doc = plane_document()
+    if study is not None:
+        doc["study"] = study
+    path = folder / name
+    path.write_text(yaml.safe_dump(doc, sort_keys=False))
+    return path
+
+
+def same_table(a, b) -> None:
+    """Equal tables, apart from where and how long each sample ran."""
+    import pandas.testing as pdt
+
+    pdt.assert_frame_equal(a.drop(columns=VOLATILE), b.drop(columns=VOLATILE))
+
+
+def invoke(*args):
+    return runner.invoke(app, [str(a) for a in args])
+
+
+def refused(r, *fragments: str) -> str:
+    """Exit 2, one line on stderr holding every fragment."""
+    assert r.exit_code == 2, (r.exit_code, r.output)
+    lines = r.stderr.strip().splitlines()
+    assert len(lines) == 1, r.stderr
+    assert lines[0].startswith("error: ")
+    for f in fragments:
+        assert f in lines[0], lines[0]
+    return lines[0]
+
+
+# ------------------------------------------------------------- closed form
+@pytest.fixture(scope="module")
+def monte_carlo():
+    spec = normal_phi(samples=200, seed=7, compute="verdict", confidence=0.99)
+    return rockdem.study(plane_document(), spec, workers=0)
+
+
+def test_monte_carlo_pf_matches_the_closed_form_within_its_interval(monte_carlo):
+    table, s = monte_carlo
+    exact = stats.norm.cdf((PSI - 33) / 2.5)  # P(tan phi < tan psi) = P(phi < psi)
+    lo, hi = s["pf_interval"]
+    assert s["done"] == s["ok"] == 200 and s["errors"] == 0
+    assert lo <= exact <= hi, (exact, s["pf"], lo, hi)
+    assert s["pf"] == pytest.approx(s["failed"] / 200)
+    # every sample's verdict is the closed form's, but within 0.05 degrees of the limit
+    phi = table[PHI].to_numpy()
+    wrong = table["failed"].to_numpy(dtype=bool) != (phi < PSI)
+    assert not np.any(wrong & (np.abs(phi - PSI) > 0.05)), phi[wrong]
+    # the samples follow the distribution (Kolmogorov-Smirnov, 1% level)
+    assert stats.kstest(phi, stats.norm(33, 2.5).cdf).pvalue > 0.01
+
+
+def test_latin_hypercube_gives_the_same_with_five_times_fewer_samples(monte_carlo):
+    n = 40
+    table, s = rockdem.study(
+        plane_document(),
+        normal_phi(samples=n, sampler="latin-hypercube", compute="verdict"),
+        workers=0,
+    )
+    exact = stats.norm.cdf((PSI - 33) / 2.5)
+    # one input: one sample per stratum of width 1/n, only the stratum of the limit can
+    # be misjudged, so the estimate is within 1/n of the exact value
+    assert abs(s["pf"] - exact) <= 1.0 / n
+    # ... which is tighter than the Monte Carlo interval of 200 samples
+    lo, hi = monte_carlo.summary["pf_interval"]
+    assert 1.0 / n < (hi - lo) / 2
+    # stratified: exactly one sample in each 1/n of the probability
+    u = stats.norm(33, 2.5).cdf(table[PHI].to_numpy())
+    assert sorted(np.floor(u * n).astype(int)) == list(range(n))
+
+
+@pytest.fixture(scope="module")
+def fos_study(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("fos-study")
+    model = write_model(folder, normal_phi(samples=8, sampler="latin-hypercube", seed=3, worst=2))
+    return model, rockdem.study(model, out=folder / "out", workers=0)
+
+
+def test_each_factor_of_safety_is_the_closed_form(fos_study):
+    _, (table, s) = fos_study
+    phi = table[PHI].to_numpy()
+    exact = np.tan(np.radians(phi)) / np.tan(np.radians(PSI))
+    assert np.allclose(table["fs"].to_numpy(dtype=float), exact, rtol=0.005)
+    assert (table["fs_low"] <= table["fs"]).all() and (table["fs"] <= table["fs_high"]).all()
+    assert list(table["failed"]) == list(exact < 1)
+    assert np.allclose(table["unstable_area"].to_numpy(dtype=float), 2.0)  # the 2 x 1 block
+    assert (table["unstable_blocks"] == 1).all()
+    fs = table["fs"].to_numpy(dtype=float)
+    assert s["fs"]["mean"] == pytest.approx(fs.mean())
+    assert s["reliability_index"]["normal"] == pytest.approx((fs.mean() - 1) / fs.std(ddof=1))
+    assert s["sensitivity"][0]["spearman"] == pytest.approx(1.0)  # FS rises with phi
+    assert s["worst"] == [int(i) for i in table.sort_values("fs")["sample"][:2]]
+
+
+def test_the_files_are_written_and_the_worst_samples_replay(fos_study):
+    import pandas as pd
+
+    _, (table, s) = fos_study
+    folder = Path(s["folder"])
+    for name in (
+        "samples.csv",
+        "samples.parquet",
+        "summary.json",
+        "study.json",
+        "fs-distribution.png",
+        "sensitivity.png",
+    ):
+        assert (folder / name).stat().st_size > 0, name
+    same_table(pd.read_parquet(folder / "samples.parquet"), table)
+    assert json.loads((folder / "summary.json").read_text())["pf"] == s["pf"]
+    assert len(s["worst_files"]) == 2
+    for i, rel in zip(s["worst"], s["worst_files"], strict=True):
+        model, cfg = load_model(folder / rel)
+        row = table.set_index("sample").loc[i]
+        assert cfg.joints["plane"].friction_angle == row[PHI]
+        assert rockdem.factor_of_safety(model).value == pytest.approx(row["fs"], rel=1e-9)
+
+
+def test_the_report_gets_a_study_section(fos_study, tmp_path):
+    from rockdem.report import write_report
+
+    model, result = fos_study
+    plan = prepare(model)
+    path = write_report(plan.nominal, tmp_path, study=result, animation=False)
+    html = path.read_text()
+    assert 'id="study"' in html and "Probabilistic study" in html
+    assert 'id="fig-study-fs-distribution"' in html and PHI in html
+    assert f"{result.summary['pf']:.4g}" in html
+
+
+# ------------------------------------------------------------ parametric sweep
+def test_a_sweep_over_two_inputs_is_the_closed_form_on_its_grid(tmp_path):
+    spec = {
+        "sweep": {
+            PHI: {"values": [28, 34]},
+            "loads.seismic_h": {"start": 0, "stop": 0.1, "steps": 2},
+        }
+    }
+    table, s = rockdem.study(plane_document(), spec, workers=0, out=tmp_path / "sweep")
+    assert s["kind"] == "sweep" and s["pf"] is None and s["samples"] == 4
+    assert list(zip(table[PHI], table["loads.seismic_h"], strict=True)) == [
+        (28, 0),
+        (28, 0.1),
+        (34, 0),
+        (34, 0.1),
+    ]
+    exact = [
+        sliding_fos(PSI, p, k=k) for p, k in zip(table[PHI], table["loads.seismic_h"], strict=True)
+    ]
+    assert np.allclose(table["fs"].to_numpy(dtype=float), exact, rtol=0.005)
+    assert (tmp_path / "sweep" / "sweep.png").stat().st_size > 0
+
+
+# ------------------------------------------------------------------ sampling
+def test_distributions_correlation_and_seeds():
+    spec = StudySpec.model_validate(
+        {
+            "inputs": {
+                "a": {"distribution": "lognormal", "mean": 10, "sd": 3},
+                "b": {"distribution": "normal", "mean": 35, "sd": 2},
+                "c": {"distribution": "triangular", "min": 1, "mode": 2, "max": 5},
+                "d": {
+                    "distribution": "truncated-normal",
+                    "mean": 0,
+                    "sd": 1,
+                    "min": -0.5,
+                    "max": 2,
+                },
+                "e": {"distribution": "uniform", "min": 3, "max": 4},
+            },
+            "correlations": [{"inputs": ["a", "b"], "rho": -0.6}],
+            "samples": 4000,
+            "seed": 11,
+        }
+    )
+    x = sampling.draw(spec)
+    assert np.array_equal(x, sampling.draw(spec))  # reproducible
+    other = sampling.draw(spec.model_copy(update={"seed": 12}))
+    assert not np.allclose(x, other)
+    assert x[:, 0].mean() == pytest.approx(10, rel=0.03) and x[:, 0].std() == pytest.approx(
+        3, rel=0.06
+    )
+    assert (x[:, 0] > 0).all()
+    assert (
+        x[:, 2].min() >= 1
+        and x[:, 2].max() <= 5
+        and x[:, 2].mean() == pytest.approx(8 / 3, rel=0.03)
+    )
+    assert x[:, 3].min() >= -0.5 and x[:, 3].max() <= 2
+    assert x[:, 4].min() >= 3 and x[:, 4].max() <= 4
+    # Gaussian copula: the normal scores carry the correlation, the ranks nearly so
+    za = stats.norm.ppf(sampling.distribution(spec.inputs["a"]).cdf(x[:, 0]))
+    zb = stats.norm.ppf(sampling.distribution(spec.inputs["b"]).cdf(x[:, 1]))
+    assert np.corrcoef(za, zb)[0, 1] == pytest.approx(-0.6, abs=0.03)
+    assert abs(stats.spearmanr(x[:, 0], x[:, 2]).statistic) < 0.05  # independent
+
+
+def test_the_pf_interval_covers_as_often_as_it_says():
+    rng = np.random.default_rng(0)
+    for p, n in ((0.02, 100), (0.3, 50)):
+        k = rng.binomial(n, p, size=2000)
+        covered = [pf_interval(int(j), n, 0.95) for j in k]
+        rate = np.mean([lo <= p <= hi for lo, hi in covered])
+        assert rate >= 0.94, (p, n, rate)
+
+
+# ------------------------------------------------------------------- Dask
+def test_dask_local_cluster_of_two_processes_gives_the_serial_table(tmp_path):
+    from dask.distributed import Client, LocalCluster
+
+    spec = normal_phi(samples=6, sampler="latin-hypercube", seed=5)
+    serial, _ = rockdem.study(plane_document(), spec, workers=0)
+    with (
+        LocalCluster(
+            n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None
+        ) as cluster,
+        Client(cluster) as client,
+    ):
+        table, s = rockdem.study(plane_document(), spec, client=client, out=tmp_path / "d")
+    assert s["workers"] == 2 and s["done"] == 6 and s["errors"] == 0
+    assert table["worker"].nunique() == 2  # both processes ran samples
+    assert not set(table["worker"]) & set(serial["worker"])  # none ran here
+    same_table(table, serial)
+
+
+# ------------------------------------------------------- interruption, resume
+def test_an_interrupted_study_continues_where_it_stopped(tmp_path):
+    spec = normal_phi(samples=10, seed=2)
+    one_run, _ = rockdem.study(plane_document(), spec, workers=0, out=tmp_path / "one")
+
+    def stop_after(k):
+        def hook(p):
+            if p.done == k:
+                raise KeyboardInterrupt
+
+        return hook
+
+    out = tmp_path / "resumed"
+    with pytest.raises(KeyboardInterrupt):
+        rockdem.study(plane_document(), spec, workers=0, out=out, progress=stop_after(4))
+    rows = (out / "samples.csv").read_text().splitlines()
+    assert len(rows) == 1 + 4  # the header and the four rows done
+    seen = []
+    table, s = rockdem.study(
+        plane_document(), spec, workers=0, out=out, progress=lambda p: seen.append(p.row["sample"])
+    )
+    assert s["resumed"] == 4 and s["ran"] == 6 and len(seen) == 6
+    same_table(table, one_run)
+    assert (out / "samples.csv").read_text().split("\n")[0] == (
+        tmp_path / "one" / "samples.csv"
+    ).read_text().split("\n")[0]
+
+
+def test_a_killed_command_loses_nothing_and_the_rerun_finishes(tmp_path):
+    import pandas as pd
+
+    model = write_model(tmp_path, normal_phi(samples=8, seed=4))
+    out = tmp_path / "killed"
+    cmd = [
+        sys.executable,
+        "-m",
+        "rockdem",
+        "study",
+        str(model),
+        "--out",
+        str(out),
+        "--workers",
+        "0",
+        "--quiet",
+    ]
+    csv_path = out / "samples.csv"
+    deadline = time.monotonic() + 120
+    with subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE) as proc:
+        try:
+            while time.monotonic() < deadline and proc.poll() is None:
+                if csv_path.exists() and len(csv_path.read_text().splitlines()) >= 1 + 3:
+                    break
+                time.sleep(0.02)
+            assert proc.poll() is None, proc.stderr.read()
+        finally:
+            if proc.poll() is None:
+                os.kill(proc.pid, signal.SIGKILL)
+            proc.wait(timeout=30)
+    killed_at = len(csv_path.read_text().splitlines()) - 1
+    assert 3 <= killed_at < 8
+    r = invoke("study", model, "--out", out, "--workers", "0")
+    assert r.exit_code == 0, r.output
+    assert f"{killed_at} from an earlier run" in r.stdout
+    r = invoke("study", model, "--out", tmp_path / "whole", "--workers", "0")
+    assert r.exit_code == 0, r.output
+    same_table(
+        pd.read_parquet(out / "samples.parquet"),
+        pd.read_parquet(tmp_path / "whole" / "samples.parquet"),
+    )
+    strip = [c for c in pd.read_csv(out / "samples.csv").columns if c not in VOLATILE]
+    assert pd.read_csv(out / "samples.csv")[strip].equals(
+        pd.read_csv(tmp_path / "whole" / "samples.csv")[strip]
+    )
+
+
+def test_a_folder_of_another_study_is_refused(tmp_path):
+    rockdem.study(
+        plane_document(), normal_phi(samples=2, compute="verdict"), workers=0, out=tmp_path / "o"
+    )
+    with pytest.raises(rockdem.InputError, match="results of another study"):
+        rockdem.study(
+            plane_document(),
+            normal_phi(samples=3, compute="verdict"),
+            workers=0,
+            out=tmp_path / "o",
+        )
+
+
+# ---------------------------------------------------------------- bad input
+BAD = [
+    (
+        {
+            "inputs": {
+                "joints.plane.friction_angel": {"distribution": "normal", "mean": 33, "sd": 2}
+            }
+        },
+        ["study.inputs.joints.plane.friction_angel", "did you mean `friction_angle`"],
+    ),
+    (
+        {
+            "inputs": {
+                "joints.bedding.friction_angle": {"distribution": "normal", "mean": 3, "sd": 2}
+            }
+        },
+        ["study.inputs.joints.bedding.friction_angle", "`joints` has no key `bedding`"],
+    ),
+    (
+        {"inputs": {"blocks[5].unit_weight": {"distribution": "normal", "mean": 3, "sd": 1}}},
+        ["study.inputs.blocks[5].unit_weight", "has 2 items"],
+    ),
+    (
+        {"inputs": {"joints.plane": {"distribution": "normal", "mean": 3, "sd": 1}}},
+        ["study.inputs.joints.plane", "is a mapping, not a number"],
+    ),
+    (
+        {"inputs": {"loads.water_table[*][1]": {"distribution": "normal", "mean": 3, "sd": 1}}},
+        ["study.inputs.loads.water_table[*][1]", "`loads.water_table` is not in the file"],
+    ),
+    (
+        {"inputs": {PHI: {"distribution": "normal", "mean": 33, "sd": 0}}},
+        ["study.inputs.joints.plane.friction_angle", "sd = 0 must be > 0"],
+    ),
+    (
+        {"inputs": {PHI: {"distribution": "uniform", "min": 40, "max": 30}}},
+        ["study.inputs.joints.plane.friction_angle", "min = 40 must be < max = 30"],
+    ),
+    (
+        {"inputs": {PHI: {"distribution": "triangular", "min": 30, "max": 40}}},
+        ["triangular needs", "`mode` is missing"],
+    ),
+    (
+        {"inputs": {PHI: {"distribution": "normal", "mean": 33, "sd": 2, "max": 40}}},
+        ["normal takes `mean`, `sd`, not `max`"],
+    ),
+    (
+        {"inputs": {PHI: {"distribution": "gaussian", "mean": 33, "sd": 2}}},
+        ["study.inputs.joints.plane.friction_angle.distribution", "'normal'"],
+    ),
+    (
+        {"inputs": {PHI: {"distribution": "lognormal", "mean": -1, "sd": 2}}},
+        ["lognormal: mean = -1 must be > 0"],
+    ),
+    (
+        {"inputs": {PHI: {"distribution": "normal", "mean": 95, "sd": 1}}},
+        ["study inputs at their medians", "joints.plane.friction_angle: 95", "out of range"],
+    ),
+    (
+        {
+            "inputs": {PHI: {"distribution": "normal", "mean": 33, "sd": 2}},
+            "correlations": [{"inputs": [PHI, "joints.plane.cohesion"], "rho": 0.5}],
+        },
+        ["correlations: 'joints.plane.cohesion' is not one of `inputs`"],
+    ),
+    (
+        {"inputs": {PHI: {"distribution": "normal", "mean": 33, "sd": 2}}, "sampels": 10},
+        ["study.sampels", "unknown key", "did you mean `samples`"],
+    ),
+    (
+        {
+            "sweep": {PHI: {"values": [30, 31]}},
+            "inputs": {PHI: {"distribution": "normal", "mean": 33, "sd": 2}},
+        },
+        ["either `inputs`", "not both"],
+    ),
+]
+
+
+@pytest.mark.parametrize(("spec", "fragments"), BAD, ids=[str(i) for i in range(len(BAD))])
+def test_bad_input_is_one_line_and_exit_2(tmp_path, spec, fragments):
+    model = write_model(tmp_path, spec)
+    r = invoke("study", model, "--out", tmp_path / "out", "--workers", "0")
+    refused(r, "plane.yaml", *fragments)
+    assert not (tmp_path / "out").exists()  # refused before anything is written
+
+
+def test_contradictory_correlations_are_refused(tmp_path):
+    inputs = {
+        k: {"distribution": "normal", "mean": 30, "sd": 1}
+        for k in ("joints.plane.friction_angle", "joints.plane.cohesion", "loads.seismic_h")
+    }
+    inputs["loads.seismic_h"] = {"distribution": "uniform", "min": 0, "max": 0.1}
+    inputs["joints.plane.cohesion"] = {"distribution": "uniform", "min": 0, "max": 5}
+    a, b, c = inputs
+    spec = {
+        "inputs": inputs,
+        "correlations": [
+            {"inputs": [a, b], "rho": 0.9},
+            {"inputs": [b, c], "rho": 0.9},
+            {"inputs": [a, c], "rho": -0.9},
+        ],
+    }
+    r = invoke("study", write_model(tmp_path, spec), "--out", tmp_path / "o", "--workers", "0")
+    refused(r, "study.correlations", "not positive definite")
+
+
+def test_no_study_section_and_workers_with_scheduler(tmp_path):
+    model = write_model(tmp_path, None)
+    refused(invoke("study", model, "--out", tmp_path / "o"), "has no `study:` section")
+    spec = tmp_path / "s.yaml"
+    spec.write_text(yaml.safe_dump({"study": normal_phi(samples=2, compute="verdict")}))
+    refused(
+        invoke(
+            "study",
+            model,
+            "--out",
+            tmp_path / "o",
+            "--workers",
+            "1",
+            "--scheduler",
+            "tcp://127.0.0.1:1",
+        ),
+        "--workers",
+        "not both",
+    )
+    r = invoke("study", model, "--spec", spec, "--out", tmp_path / "o", "--workers", "0", "--json")
+    assert r.exit_code == 0, r.output
+    assert json.loads(r.stdout)["done"] == 2
+
+
+def test_without_dask_the_command_says_how_to_install_it(tmp_path, monkeypatch):
+    model = write_model(tmp_path, normal_phi(samples=2, compute="verdict"))
+    monkeypatch.setitem(sys.modules, "dask.distributed", None)  # import fails
+    refused(invoke("study", model, "--out", tmp_path / "o"), "pip install 'rockdem[study]'")
+
+
+def test_a_sample_out_of_range_is_a_row_with_its_error():
+    spec = normal_phi(samples=30, seed=1, compute="verdict")
+    spec["inputs"][PHI] = {"distribution": "uniform", "min": 70, "max": 95}
+    table, s = rockdem.study(plane_document(), spec, workers=0)
+    bad = table[PHI] >= 90
+    assert bad.any() and (~bad).any()
+    assert table["error"][bad].str.contains("friction_angle: .* is out of range").all()
+    assert table["error"][~bad].isna().all()
+    assert s["errors"] == int(bad.sum()) and s["ok"] == int((~bad).sum())
+
+
+def test_the_command_line_does_not_load_dask_or_pandas():
+    code = (
+        "import sys, rockdem.cli; from rockdem.config import load_model; "
+        "from rockdem.examples import example_path; load_model(example_path('wedge-verification'));"
+        "print(sorted(m for m in ('dask', 'distributed', 'pandas', 'pyarrow') if m in sys.modules))"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "[]"
