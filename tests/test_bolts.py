@@ -236,3 +236,22 @@ def test_bad_bolt_in_a_file_is_one_line_and_exit_2(tmp_path, change, where, mess
     lines = [ln for ln in res.output.splitlines() if ln.strip()]
     assert len(lines) == 1, res.output
     assert where in lines[0] and message in lines[0]
+
+
+def test_pictures_and_report_show_the_bolts(tmp_path):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from rockdem import plots
+    from rockdem.report import write_report
+
+    an = rd.analyse(block_with_bolt(30.0))
+    ax = plots.plot_failure(an)
+    assert any(c.get_gid() == "bolts" for c in ax.collections)
+    dots = [c for c in ax.collections if c.get_gid() == "bolt-crossings"]
+    assert len(dots) == 1 and len(dots[0].get_offsets()) == 1
+    model_ax = plots.plot_model(an.system.model)
+    assert any(c.get_gid() == "bolts" for c in model_ax.collections)
+    path = write_report(an.system.model, tmp_path, analysis=an, compute_fos=False, animation=False)
+    html = path.read_text()
+    assert "<h3>Bolts at F = 1</h3>" in html and 'class="bolts"' in html

@@ -210,6 +210,42 @@ def _unstable_table(a: Analysis, limit: int, u: Units = UNKNOWN) -> str:
     return lead + _table(header, rows, left=2, cls="unstable-blocks") + more
 
 
+def _bolts_table(a: Analysis, u: Units = UNKNOWN) -> str:
+    """Every joint a bolt crosses: force per bolt, capacity there, utilisation."""
+    r = a.bolts
+    if r is None:
+        return ""
+    use = r.utilisation
+    rows = [
+        [
+            str(r.name[k]),
+            _num(r.depth[k], ".3g"),
+            f"({_num(r.point[k, 0], '.4g')}, {_num(r.point[k, 1], '.4g')})",
+            _num(r.axial_force[k], ".4g"),
+            _num(r.shear_force[k], ".4g"),
+            _num(r.capacity[k], ".4g"),
+            f"{100 * use[k]:.0f}%",
+            "yes" if r.yielded[k] else "",
+        ]
+        for k in np.argsort(-use, kind="stable")
+    ]
+    header = [
+        "bolt",
+        "depth" + u.suffix("length"),
+        "at joint",
+        "axial force" + u.suffix("force"),
+        "shear force" + u.suffix("force"),
+        "capacity" + u.suffix("force"),
+        "utilisation",
+        "yielded",
+    ]
+    note = (
+        '<p class="note">Force per bolt where it crosses each joint (tension positive), '
+        "most used first; capacity is the steel's or the grout bond's beyond the joint.</p>"
+    )
+    return note + _table(header, rows, left=3, cls="bolts")
+
+
 def _warnings(*analyses: Analysis | None) -> str:
     """A warning box per side of the model the mechanism reaches (rockdem.modes)."""
     shown: dict[str, str] = {}  # message -> the factor of the first state that gave it
@@ -598,6 +634,8 @@ def write_report(
         f"<h3>Unstable blocks at {F1}</h3>",
         _unstable_table(a, max_rows, u),
     ]
+    if a.bolts is not None:
+        sections += [f"<h3>Bolts at {F1}</h3>", _bolts_table(a, u)]
     if failed is not None and failed is not a and not _same_state(a, failed):
         sections += [
             f"<h3>Joints at F = {format_factor(failed.strength_factor)} (failure): state now "

@@ -11,6 +11,7 @@ from matplotlib.lines import Line2D
 from matplotlib.patches import FancyArrowPatch, Patch
 
 from . import _common as c
+from .bolts import draw_bolt_lines
 
 
 def draw_blocks(ax: Axes, blocks, verts=None, *, face=None, zorder: float = 1.0) -> tuple:
@@ -245,6 +246,7 @@ def plot_model(
         tails = np.vstack([tails, tails + lift])
     if loads and mdl.loads.water_table:
         draw_water_table(ax, mdl.loads.water_table, blocks)
+    bolt_handles = draw_bolt_lines(ax, mdl.bolts)
     if block_ids:
         draw_block_ids(ax, blocks, free_only=True)
     c.setup_space_axes(ax, blocks, unit, extra=tails)
@@ -278,6 +280,7 @@ def plot_model(
             handles.append(Line2D([], [], color=c.SUPPORT_COLOR, lw=2, marker=">", label="support"))
         if loads and mdl.loads.water_table:
             handles.append(Line2D([], [], color=WATER_COLOR, lw=1.5, ls="--", label="water table"))
+        handles += bolt_handles
         if loads and (any(not p.support for p in mdl.loads.points) or mdl.loads.lines):
             handles.append(Line2D([], [], color=c.LOAD_COLOR, lw=2, marker=">", label="load"))
         ax.legend(handles=handles, loc="upper right", fontsize=7, framealpha=0.9)

@@ -15,6 +15,7 @@ from matplotlib.patches import Patch
 from ..modes import MODES, boundary_contacts, failure_modes
 from ..results import CURRENT_LABELS, CURRENT_NAMES, format_factor
 from . import _common as c
+from .bolts import draw_bolt_forces
 from .model import draw_block_ids, draw_blocks
 
 
@@ -118,6 +119,8 @@ def plot_failure(
     slides orange, topples sky blue, slides and topples yellow, falls purple),
     with the pivot corners of toppling blocks dotted and contacts with a
     fixed side of the model (:func:`rockdem.modes.boundary_contacts`) dash-dotted.
+    Bolts are dark lines; where one crosses a joint a dot shows its force
+    as a share of its capacity (viridis, 0 to 100%; red edge: yielded).
 
     Parameters
     ----------
@@ -176,6 +179,8 @@ def plot_failure(
         if now
         else _draw_history(ax, seg, a.interfaces.state if frame.final else frame.interface_state)
     )
+    if frame.final and system.bolts is not None:
+        handles += draw_bolt_forces(ax, a)
     if block_ids:
         draw_block_ids(ax, blocks, free_only=True)
     c.setup_space_axes(ax, blocks, unit, scale_bar=scale_bar)
