@@ -64,6 +64,7 @@ from .common import app as app
 from .common import err as err
 from .common import example_app as example_app
 from .common import out as out
+from .exchange import import_dxf as import_dxf
 from .figures import PLOT_FORMATS as PLOT_FORMATS
 from .figures import PLOT_WHAT as PLOT_WHAT
 from .figures import REPORT_FILE as REPORT_FILE
@@ -93,6 +94,7 @@ app.command()(report)
 app.command()(plot)
 app.command("study")(_study)
 app.command()(schema)
+app.command("import")(import_dxf)
 example_app.command("list")(example_list)
 example_app.command("copy")(example_copy)
 

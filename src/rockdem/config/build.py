@@ -157,6 +157,10 @@ def build_model(
     names: dict[str, Loc] = {}
     ids: dict[int, int] = {}  # block id -> position in `blocks`
     try:
+        if cfg.geometry is not None:  # a drawn section: its blocks, as if listed
+            from .geometry import with_dxf_blocks
+
+            cfg = with_dxf_blocks(cfg, source, nodes, max_blocks)
         loads = _loads(cfg, names)
         settings = _settings(cfg)
         joints = _joints(cfg)

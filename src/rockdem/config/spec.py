@@ -10,6 +10,7 @@ from typing import Literal
 from pydantic import Field, field_validator, model_validator
 from pydantic_core import PydanticCustomError
 
+from .geometry import GeometrySpec
 from .sections import (
     BlockSpec,
     JointLineSpec,
@@ -62,6 +63,9 @@ class ModelFile(_Section):
     """Explicit blocks (instead of `slope`)."""
     slope: SlopeSpec | None = None
     """A slope generated from a profile and joint sets (instead of `blocks`)."""
+    geometry: GeometrySpec | None = None
+    """A section drawn in CAD (a DXF file), cut into blocks (instead of `blocks` or
+    `slope`)."""
     remove: RemoveSpec = RemoveSpec()
     """Blocks to remove (excavation) before the analysis."""
     loads: LoadsSpec = LoadsSpec()
@@ -89,11 +93,12 @@ class ModelFile(_Section):
 
     @model_validator(mode="after")
     def _geometry(self) -> ModelFile:
-        if (self.blocks is None) == (self.slope is None):
+        given = [k for k in ("blocks", "slope", "geometry") if getattr(self, k) is not None]
+        if len(given) != 1:
             raise PydanticCustomError(
                 "geometry",
-                "give the geometry as either `blocks` or `slope`"
-                + (", not both" if self.blocks is not None else ""),
+                "give the geometry as either `blocks` or `slope` (or a `geometry` drawing)"
+                + (f", not both {given[0]} and {given[1]}" if given else ""),
             )
         return self
 

@@ -150,7 +150,10 @@ def _describe(err: dict) -> tuple[Loc, str, str]:
         fix = "write the bare number in the units stated in `units` (angles in degrees)"
         return loc, err["msg"], fix
     if kind == "geometry":
-        fix = "use `blocks:` (explicit polygons) or `slope:` (a profile cut by joint sets)"
+        fix = (
+            "use `blocks:` (explicit polygons), `slope:` (a profile cut by joint sets) "
+            "or `geometry: {dxf: FILE}` (a section drawn in CAD)"
+        )
         return loc, err["msg"], fix
     if kind in ("number_type", "float_type", "float_parsing"):
         msg = err["msg"] if kind == "number_type" else f"expected a number, got {shown}"
@@ -267,6 +270,25 @@ def _check_references(cfg: ModelFile, source: str, nodes: Any) -> None:
         for k, bid in enumerate(cfg.remove.blocks):
             if bid not in ids:
                 fail(("remove", "blocks", k), f"no block has id {bid}", "use an id of `blocks`")
+    if cfg.geometry is not None:
+        g = cfg.geometry
+        material(("geometry", "material"), g.material)
+        if g.material is not None and g.unit_weight is not None:
+            fail(("geometry",), "has both `material` and `unit_weight`", "give only one")
+        if g.material is None and g.unit_weight is None and len(cfg.materials) != 1:
+            fail(
+                ("geometry",),
+                "no unit weight for the blocks",
+                "give `material:` or `unit_weight:` (or define exactly one material)",
+            )
+        for layer, name in (g.layers.joints or {}).items():
+            joint(("geometry", "layers", "joints", layer), name)
+        if cfg.remove.profile is not None:
+            fail(
+                ("remove", "profile"),
+                "is for generated slopes",
+                "use `remove.regions` or `remove.blocks` with a drawn section",
+            )
     if cfg.slope is not None:
         s = cfg.slope
         material(("slope", "material"), s.material)

@@ -1,0 +1,768 @@
+"""A slope section drawn in CAD (DXF), read into blocks and joint lines (the model
+file of ``rockdem import`` is written by :mod:`~rockdem.exchange.model_file`).
+
+Layers
+------
+The drawing's model space is read by layer (layer names compare without
+regard to case, as CAD programs do); by default:
+
+``OUTLINE``
+    The section: one closed polyline (LWPOLYLINE or POLYLINE), the rock
+    that the joints cut into blocks.
+``FIXED``
+    Fixed ground: closed polylines inside the outline or beside it (sharing
+    its edge).  Whatever of the section lies in them is immobile; every part
+    is one ground block.
+``JOINT_<name>`` (or ``JOINT-<name>``)
+    Joint traces (LINE, LWPOLYLINE, POLYLINE) that take the joint ``<name>``
+    of the model.  A trace that crosses a block from side to side cuts it; a
+    trace that ends inside a block does not (it still assigns its joint to
+    the interfaces it lies on).
+``WATER`` (optional)
+    The water table: one polyline (or line), read left to right.
+``BOLTS`` (optional)
+    Bolts: lines from the head on the face into the rock; each becomes a
+    support force of the given magnitude at the head, pulling along the line.
+
+Other layers are not read (text, hatching, title blocks); block references
+(INSERT) are not expanded.  A mapping overrides the names::
+
+    {"outline": "SECTION", "fixed": "GROUND", "joints": {"BEDDING": "bedding"}}
+
+Arcs and splines are refused (explode them into straight segments).
+
+Units and coordinates
+---------------------
+``$INSUNITS`` of the drawing is read and the coordinates are converted to
+the model's length unit (metres unless the model says otherwise); a
+unitless drawing is read as it is.  Site coordinates are kept (x = 5e5,
+y = 7e6 stay so): the section is cut relative to a local origin and moved
+back, so a far-away section gives the same blocks as the same section near
+the origin, and the outline's vertices come back bit for bit.
+"""
+
+from __future__ import annotations
+
+import io
+import math
+import re
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..errors import InputError
+
+__all__ = [
+    "DEFAULT_LAYERS",
+    "JOINT_PREFIXES",
+    "Bolt",
+    "DxfError",
+    "Section",
+    "SectionBlocks",
+    "Trace",
+    "cut_section",
+    "example_dxf",
+    "read_section",
+]
+
+#: Default layer of each part of the section.
+DEFAULT_LAYERS = {"outline": "OUTLINE", "fixed": "FIXED", "water": "WATER", "bolts": "BOLTS"}
+#: A layer named ``JOINT_<name>`` (or ``JOINT-<name>``) holds traces of the joint ``<name>``.
+JOINT_PREFIXES = ("JOINT_", "JOINT-")
+#: Largest DXF file read, in bytes.
+MAX_DXF_BYTES = 64 * 2**20
+#: Most straight segments of joint traces (each may cut every other).
+MAX_SEGMENTS = 20_000
+#: Length units of model files (:mod:`rockdem.units`) and their DXF $INSUNITS codes.
+INSUNITS = {"in": 1, "ft": 2, "mm": 4, "cm": 5, "m": 6, "km": 7}
+#: Entities that annotate a drawing: never geometry, skipped on every layer.
+ANNOTATION = frozenset(
+    "TEXT MTEXT HATCH DIMENSION ARC_DIMENSION LEADER MLEADER MULTILEADER POINT ATTDEF "
+    "ATTRIB VIEWPORT IMAGE WIPEOUT TOLERANCE".split()
+)
+
+
+class DxfError(InputError):
+    """A drawing that cannot be read as a section: names the file, the layer and the fix.
+
+    ``key`` is the option at fault (``"layers.fixed"``, ``"bolt_force"``; empty
+    when it is the drawing itself), so that a model file can name its key.
+    """
+
+    def __init__(self, source: str, problem: str, fix: str, key: str = "") -> None:
+        self.key = key
+        super().__init__(source, problem, fix)
+
+
+@dataclass(frozen=True)
+class Trace:
+    """A joint trace as drawn: the polyline's points (model units) and its joint."""
+
+    joint: str
+    layer: str
+    points: np.ndarray
+
+
+@dataclass(frozen=True)
+class Bolt:
+    """A bolt: its head (on the face) and its far end, the force pulls along head -> tail."""
+
+    head: np.ndarray
+    tail: np.ndarray
+
+    @property
+    def length(self) -> float:
+        return float(np.hypot(*(self.tail - self.head)))
+
+    @property
+    def angle(self) -> float:
+        """Direction of the pull in degrees counter-clockwise from +x."""
+        d = self.tail - self.head
+        return math.degrees(math.atan2(d[1], d[0]))
+
+
+@dataclass(frozen=True)
+class Section:
+    """A slope section read from a drawing (coordinates in the model's length unit).
+
+    Attributes
+    ----------
+    outline : ndarray, shape (n, 2)
+        The section's closed outline, as drawn (not repeating the first point).
+    fixed : tuple of ndarray
+        Outlines of fixed ground.
+    traces : tuple of Trace
+    water_table : ndarray or None
+        Left to right.
+    bolts : tuple of Bolt
+    insunits : int
+        The drawing's $INSUNITS (0: unitless).
+    scale : float
+        Drawing units to model units.
+    layers : dict
+        The layer read for each part (``outline``, ``fixed``, ``water``, ``bolts``).
+    joint_layers : dict
+        Layer -> joint name.
+    skipped : dict
+        Layer -> entities not read (layers of no part, annotations).
+    """
+
+    source: str
+    outline: np.ndarray
+    fixed: tuple[np.ndarray, ...]
+    traces: tuple[Trace, ...]
+    water_table: np.ndarray | None
+    bolts: tuple[Bolt, ...]
+    insunits: int
+    scale: float
+    layers: dict[str, str | None]
+    joint_layers: dict[str, str]
+    skipped: dict[str, int] = field(default_factory=dict)
+
+    @property
+    def joints(self) -> list[str]:
+        """Joint names of the traces, in the order first drawn."""
+        return list(dict.fromkeys(self.joint_layers.values()))
+
+    @property
+    def extent(self) -> float:
+        """Diagonal of the bounding box of the outline and the fixed ground."""
+        xy = np.vstack([self.outline, *self.fixed])
+        return float(np.hypot(*(xy.max(axis=0) - xy.min(axis=0))))
+
+
+@dataclass(frozen=True)
+class SectionBlocks:
+    """The section cut into blocks: free blocks (by centroid x, then y), then ground.
+
+    ``lines`` are the joint traces as ``(joint, start, end)`` segments, as drawn.
+    """
+
+    polygons: tuple[np.ndarray, ...]
+    fixed: np.ndarray
+    lines: tuple[tuple[str, np.ndarray, np.ndarray], ...]
+
+    @property
+    def n_free(self) -> int:
+        return int((~self.fixed).sum())
+
+
+# ------------------------------------------------------------------ reading
+def example_dxf() -> Path:
+    """The bundled example section (``rockdem import --example``), made by
+    ``examples/make_dxf.py``: a 60 degree slope, bedding dipping 35 degrees out of
+    the face, a steep cross set, fixed ground, a water table and two bolts."""
+    from importlib import resources
+
+    return Path(str(resources.files("rockdem.exchange").joinpath("data", "section.dxf")))
+
+
+def _fail(source: str, problem: str, fix: str, key: str = "") -> DxfError:
+    return DxfError(source, problem, fix, key)
+
+
+def _open(path: Path, source: str):
+    """The ezdxf document of ``path``; one-line errors for everything else."""
+    from ..config.parse import read_bounded
+
+    try:
+        raw = read_bounded(path, source, MAX_DXF_BYTES)
+    except InputError as exc:  # worded for model files: say it of a drawing
+        problem = exc.problem.replace("a model file", "a DXF file")
+        if "regular file" in problem:
+            fix = "save the drawing to a file and give its path"
+        elif "folder" in problem:
+            fix = "give a DXF file"
+        elif "larger" in problem:
+            fix = "give the section alone (purge the drawing, or copy the section to a new one)"
+        else:
+            fix = exc.fix
+        raise _fail(source, problem, fix) from None
+    if not raw.strip():
+        raise _fail(source, "the file is empty", "export the section from CAD as a DXF file")
+    head = raw.lstrip()[:22]
+    binary = raw.startswith(b"AutoCAD Binary DXF")
+    if not binary and not re.match(rb"^(0|999)\s*[\r\n]", head):
+        what = "a DWG drawing" if raw.startswith(b"AC10") else "not a DXF file"
+        raise _fail(
+            source,
+            f"is {what} (it does not start with a DXF group code)",
+            "save or export the drawing as DXF (ASCII or binary)",
+        )
+    if not binary and raw.rstrip().rsplit(None, 1)[-1] != b"EOF":
+        raise _fail(
+            source,
+            "is incomplete: it does not end with the EOF of a DXF file (cut short?)",
+            "export or copy the drawing again",
+        )
+    import ezdxf
+    from ezdxf import recover
+
+    try:
+        doc, auditor = recover.read(io.BytesIO(raw))
+    except (ezdxf.DXFError, ValueError, IndexError, KeyError, TypeError, UnicodeError) as exc:
+        text = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        raise _fail(
+            source,
+            f"is not a readable DXF file ({text})",
+            "save or export the drawing as DXF from CAD again",
+        ) from None
+    if auditor.has_errors:
+        first = auditor.errors[0].message if auditor.errors else ""
+        raise _fail(
+            source,
+            f"has {len(auditor.errors)} structural errors ({first})",
+            "open it in CAD, run AUDIT and save it again",
+        )
+    return doc
+
+
+def _layer_names(doc) -> dict[str, str]:
+    """Upper-case name -> name of every layer defined or used in model space."""
+    names: dict[str, str] = {}
+    for layer in doc.layers:
+        names.setdefault(layer.dxf.name.upper(), layer.dxf.name)
+    for e in doc.modelspace():
+        name = e.dxf.get("layer", "0")
+        names.setdefault(name.upper(), name)
+    return names
+
+
+def _scale(doc, length_unit: str | None, source: str) -> tuple[int, float]:
+    from ezdxf.units import conversion_factor
+
+    insunits = int(doc.header.get("$INSUNITS", 0) or 0)
+    target = INSUNITS.get(length_unit or "m", 6)
+    if insunits == 0 or insunits == target:
+        return insunits, 1.0
+    try:
+        factor = float(conversion_factor(insunits, target))
+    except (KeyError, ValueError, IndexError, ZeroDivisionError):
+        raise _fail(
+            source,
+            f"$INSUNITS = {insunits} is not a unit of length rockdem can convert",
+            "set the drawing units (UNITS) to m, cm, mm, km, ft or in",
+        ) from None
+    if not (math.isfinite(factor) and factor > 0):
+        raise _fail(source, f"$INSUNITS = {insunits} gives no scale", "set the drawing units")
+    return insunits, factor
+
+
+def _describe(e) -> str:
+    """``LWPOLYLINE #1F``: the entity's type and handle (to find it in CAD)."""
+    handle = e.dxf.get("handle", None)
+    return f"{e.dxftype()}" + (f" #{handle}" if handle else "")
+
+
+def _entity_points(e, scale: float, source: str, layer: str) -> tuple[np.ndarray, bool]:
+    """Points (k, 2) in model units and whether the entity is closed."""
+    kind = e.dxftype()
+    where = f"layer {layer}: {_describe(e)}"
+    if kind == "LINE":
+        pts = [e.dxf.start, e.dxf.end]
+        closed = False
+    elif kind == "LWPOLYLINE":
+        if any(b for *_, b in e.get_points("xyb")):
+            raise _fail(
+                source,
+                f"{where} has arcs (bulges)",
+                "rockdem reads straight segments only: explode the arcs into short segments",
+            )
+        pts, closed = list(e.vertices_in_wcs()), bool(e.closed)
+    elif kind == "POLYLINE":
+        if not (e.is_2d_polyline or e.is_3d_polyline):
+            raise _fail(source, f"{where} is a mesh, not a line", "draw a polyline")
+        if any(v.dxf.get("bulge", 0) for v in e.vertices):
+            raise _fail(
+                source,
+                f"{where} has arcs (bulges)",
+                "rockdem reads straight segments only: explode the arcs into short segments",
+            )
+        pts, closed = list(e.points_in_wcs()), bool(e.is_closed)
+    else:
+        raise _fail(
+            source,
+            f"{where} is not a line or polyline",
+            "draw the section with LINE and POLYLINE only (explode blocks, arcs and splines)",
+        )
+    xy = np.array([(p[0], p[1]) for p in pts], dtype=float).reshape(-1, 2) * scale
+    if not np.isfinite(xy).all():
+        raise _fail(
+            source, f"{where} has a coordinate that is not a finite number", "fix the drawing"
+        )
+    if np.abs(xy).max(initial=0.0) > 1e9:
+        raise _fail(
+            source,
+            f"{where} lies beyond 1e9 from the origin (in model units)",
+            "move the drawing to a local origin, or check $INSUNITS",
+        )
+    if len(xy) > 1:  # repeated points (a CAD habit) carry no geometry
+        keep = np.ones(len(xy), dtype=bool)
+        keep[1:] = (xy[1:] != xy[:-1]).any(axis=1)
+        xy = xy[keep]
+    return xy, closed
+
+
+def _closed_ring(xy: np.ndarray, closed: bool, source: str, layer: str, what: str, e) -> np.ndarray:
+    """A simple closed ring (first point not repeated), or a one-line error."""
+    import shapely
+
+    where = f"layer {layer}: {_describe(e)}"
+    size = float(np.hypot(*(xy.max(axis=0) - xy.min(axis=0)))) if len(xy) else 0.0
+    if len(xy) > 2 and np.hypot(*(xy[-1] - xy[0])) <= 1e-9 * size:
+        xy, closed = xy[:-1], True
+    if not closed:
+        gap = float(np.hypot(*(xy[-1] - xy[0]))) if len(xy) else 0.0
+        raise _fail(
+            source,
+            f"the {what} ({where}) is open: its ends ({_pt(xy[0])} and {_pt(xy[-1])}) "
+            f"are {gap:.4g} apart",
+            "close the polyline (PEDIT Close, or tick 'closed')",
+        )
+    if len(xy) < 3 or size == 0.0:
+        raise _fail(
+            source,
+            f"the {what} ({where}) has fewer than 3 distinct points",
+            "draw it around an area",
+        )
+    poly = shapely.Polygon(xy)
+    if not poly.is_valid:
+        reason = shapely.is_valid_reason(poly)
+        m = re.search(r"\[([-+0-9.eE]+) ([-+0-9.eE]+)\]", reason)
+        at = f" at ({float(m.group(1)):.6g}, {float(m.group(2)):.6g})" if m else ""
+        raise _fail(
+            source,
+            f"the {what} ({where}) crosses itself{at}",
+            "redraw it so that it goes once around the area without crossing",
+        )
+    if poly.area <= (1e-8 * size) ** 2:
+        raise _fail(source, f"the {what} ({where}) has no area", "draw it around an area")
+    return xy
+
+
+def _check_simple_line(xy: np.ndarray, source: str, layer: str, e) -> None:
+    import shapely
+
+    where = f"layer {layer}: {_describe(e)}"
+    if len(xy) < 2:
+        raise _fail(source, f"{where} has zero length", "delete it or draw the trace")
+    line = shapely.LineString(xy)
+    if not line.is_simple:
+        parts = shapely.get_parts(shapely.node(line))
+        ends = shapely.get_coordinates(shapely.boundary(parts))
+        uniq, count = np.unique(ends, axis=0, return_counts=True)
+        inner = uniq[count > 2] if (count > 2).any() else uniq[count > 1]
+        at = f" at {_pt(inner[0])}" if len(inner) else ""
+        raise _fail(
+            source,
+            f"{where} crosses itself{at}",
+            "draw each joint trace as a line that does not cross or double back on itself",
+        )
+
+
+def _pt(p) -> str:
+    return f"({p[0]:.6g}, {p[1]:.6g})"
+
+
+def _resolve(
+    layers: Mapping[str, Any] | None,
+    names: dict[str, str],
+    joints: Sequence[str] | None,
+    source: str,
+) -> tuple[dict[str, str | None], dict[str, str]]:
+    """(role -> layer name in the drawing, joint layer -> joint name)."""
+    given = dict(layers or {})
+    unknown = set(given) - {*DEFAULT_LAYERS, "joints"}
+    if unknown:
+        key = sorted(unknown)[0]
+        raise _fail(
+            source,
+            f"layers.{key}: not a part of a section",
+            f"use {', '.join(DEFAULT_LAYERS)} or joints",
+            f"layers.{key}",
+        )
+    available = ", ".join(sorted(names.values())) or "none"
+    roles: dict[str, str | None] = {}
+    for role, default in DEFAULT_LAYERS.items():
+        wanted = given.get(role)
+        name = names.get((wanted or default).upper())
+        if wanted is not None and name is None:
+            raise _fail(
+                source,
+                f"layers.{role}: there is no layer {wanted!r} in the drawing "
+                f"(its layers: {available})",
+                "name one of its layers",
+                f"layers.{role}",
+            )
+        if name is None and role in ("outline", "fixed"):
+            what = "the section outline" if role == "outline" else "the fixed ground"
+            raise _fail(
+                source,
+                f"no layer {default} for {what} (the drawing's layers: {available})",
+                f"put it on a layer {default}, or name its layer with layers.{role}",
+                f"layers.{role}",
+            )
+        roles[role] = name
+    joint_layers: dict[str, str] = {}
+    mapping = given.get("joints")
+    if mapping is not None:
+        for layer, joint in dict(mapping).items():
+            name = names.get(str(layer).upper())
+            if name is None:
+                raise _fail(
+                    source,
+                    f"layers.joints: there is no layer {layer!r} in the drawing "
+                    f"(its layers: {available})",
+                    "name one of its layers",
+                    f"layers.joints.{layer}",
+                )
+            if joints is not None and joint not in joints:
+                raise _fail(
+                    source,
+                    f"layers.joints.{layer}: joint {joint!r} is not defined in `joints`",
+                    f"use one of {list(joints)}",
+                    f"layers.joints.{layer}",
+                )
+            joint_layers[name] = str(joint)
+    else:
+        for upper, name in sorted(names.items()):
+            prefix = next((p for p in JOINT_PREFIXES if upper.startswith(p)), None)
+            if prefix is None or len(name) == len(prefix):
+                continue
+            joint_layers[name] = _joint_of(name[len(prefix) :], joints, name, source)
+    taken = {n.upper(): r for r, n in roles.items() if n is not None}
+    for layer in joint_layers:
+        if layer.upper() in taken:
+            raise _fail(
+                source,
+                f"layer {layer} is both the {taken[layer.upper()]} and a joint layer",
+                "give each part of the section its own layer",
+            )
+    return roles, joint_layers
+
+
+def _joint_of(name: str, joints: Sequence[str] | None, layer: str, source: str) -> str:
+    if joints is None:
+        return name
+    if name in joints:
+        return name
+    same = [j for j in joints if j.upper() == name.upper()]
+    if len(same) == 1:
+        return same[0]
+    raise _fail(
+        source,
+        f"layer {layer}: no joint {name!r} in `joints` (joints: {', '.join(joints)})",
+        "add the joint to `joints`, rename the layer, or map it with geometry.layers.joints",
+        "layers.joints",
+    )
+
+
+def read_section(
+    path: str | Path,
+    *,
+    layers: Mapping[str, Any] | None = None,
+    joints: Sequence[str] | None = None,
+    length_unit: str | None = None,
+) -> Section:
+    """Read a slope section from a DXF drawing (see the module's layer convention).
+
+    Parameters
+    ----------
+    path : str or Path
+    layers : mapping, optional
+        Layer names overriding :data:`DEFAULT_LAYERS` (keys ``outline``,
+        ``fixed``, ``water``, ``bolts``) and ``joints``: ``{layer: joint}``
+        (instead of the ``JOINT_<name>`` layers).
+    joints : sequence of str, optional
+        The model's joint names: every joint layer must name one (case aside).
+        None: the joint names are taken from the layers (``rockdem import``).
+    length_unit : str, optional
+        The model's length unit (``"m"``, ``"mm"``, ...; default m): the
+        drawing's $INSUNITS is converted to it.
+
+    Raises
+    ------
+    DxfError
+        A missing, empty or non-DXF file, an unknown layer, an open or
+        self-crossing outline, a self-crossing trace, arcs, a water table that
+        turns back, too many traces.
+    """
+    path = Path(path)
+    source = str(path)
+    doc = _open(path, source)
+    names = _layer_names(doc)
+    roles, joint_layers = _resolve(layers, names, joints, source)
+    insunits, scale = _scale(doc, length_unit, source)
+    by_layer: dict[str, list] = {}
+    skipped: dict[str, int] = {}
+    wanted = {n.upper() for n in roles.values() if n} | {n.upper() for n in joint_layers}
+    for e in doc.modelspace():
+        layer = e.dxf.get("layer", "0")
+        if layer.upper() in wanted and e.dxftype() not in ANNOTATION:
+            by_layer.setdefault(layer.upper(), []).append(e)
+        else:
+            skipped[layer] = skipped.get(layer, 0) + 1
+
+    def entities(name: str | None) -> list:
+        return by_layer.get(name.upper(), []) if name else []
+
+    # -------------------------------------------------------------- outline
+    outline_layer = roles["outline"]
+    found = entities(outline_layer)
+    for e in found:
+        if e.dxftype() not in ("LINE", "LWPOLYLINE", "POLYLINE"):
+            _entity_points(e, scale, source, outline_layer)  # says what it is
+    polys = [e for e in found if e.dxftype() != "LINE"]
+    if not found:
+        raise _fail(
+            source,
+            f"layer {outline_layer} holds no outline",
+            "draw the section as one closed polyline on it",
+            "layers.outline",
+        )
+    if len(found) != len(polys):
+        raise _fail(
+            source,
+            f"layer {outline_layer}: the outline is drawn with LINEs",
+            "join them into one closed polyline (PEDIT Join)",
+            "layers.outline",
+        )
+    if len(polys) > 1:
+        raise _fail(
+            source,
+            f"layer {outline_layer} holds {len(polys)} polylines",
+            "draw the section as one closed polyline (put fixed ground on the fixed layer)",
+            "layers.outline",
+        )
+    xy, closed = _entity_points(polys[0], scale, source, outline_layer)
+    outline = _closed_ring(xy, closed, source, outline_layer, "outline", polys[0])
+
+    # -------------------------------------------------------------- fixed
+    fixed = []
+    for e in entities(roles["fixed"]):
+        xy, closed = _entity_points(e, scale, source, roles["fixed"])
+        fixed.append(_closed_ring(xy, closed, source, roles["fixed"], "fixed region", e))
+    if not fixed:
+        raise _fail(
+            source,
+            f"layer {roles['fixed']} holds no closed polyline: nothing holds the blocks",
+            "draw the fixed ground (the rock below and behind the section) as closed polylines",
+            "layers.fixed",
+        )
+
+    # -------------------------------------------------------------- joints
+    traces = []
+    n_segments = 0
+    for layer, joint in joint_layers.items():
+        for e in entities(layer):
+            xy, closed = _entity_points(e, scale, source, layer)
+            if closed and len(xy) > 2:
+                xy = np.vstack([xy, xy[:1]])
+            _check_simple_line(xy, source, layer, e)
+            traces.append(Trace(joint, layer, xy))
+            n_segments += len(xy) - 1
+    if n_segments > MAX_SEGMENTS:
+        raise _fail(
+            source,
+            f"has {n_segments:,} joint trace segments, more than the limit of {MAX_SEGMENTS:,}",
+            "draw fewer or simpler traces (or a generated `slope`)",
+        )
+
+    # -------------------------------------------------------------- water
+    water = None
+    if roles["water"]:
+        found = entities(roles["water"])
+        if len(found) > 1:
+            raise _fail(
+                source,
+                f"layer {roles['water']} holds {len(found)} entities",
+                "draw the water table as one polyline from left to right",
+                "layers.water",
+            )
+        if found:
+            xy, _ = _entity_points(found[0], scale, source, roles["water"])
+            water = _water_table(xy, source, roles["water"], found[0])
+
+    # -------------------------------------------------------------- bolts
+    bolts = []
+    if roles["bolts"]:
+        import shapely
+
+        ring = shapely.LinearRing(outline)
+        for e in entities(roles["bolts"]):
+            xy, _ = _entity_points(e, scale, source, roles["bolts"])
+            if len(xy) != 2:
+                raise _fail(
+                    source,
+                    f"layer {roles['bolts']}: {_describe(e)} is not one straight line",
+                    "draw each bolt as a LINE from its head on the face into the rock",
+                    "layers.bolts",
+                )
+            d0, d1 = shapely.distance(shapely.points(xy), ring)
+            head, tail = (xy[0], xy[1]) if d0 <= d1 else (xy[1], xy[0])
+            bolts.append(Bolt(head, tail))
+    return Section(
+        source=source,
+        outline=outline,
+        fixed=tuple(fixed),
+        traces=tuple(traces),
+        water_table=water,
+        bolts=tuple(bolts),
+        insunits=insunits,
+        scale=scale,
+        layers=roles,
+        joint_layers=joint_layers,
+        skipped=skipped,
+    )
+
+
+def _water_table(xy: np.ndarray, source: str, layer: str, e) -> np.ndarray:
+    if len(xy) < 2:
+        raise _fail(source, f"layer {layer}: the water table is a point", "draw it as a line")
+    if xy[-1, 0] < xy[0, 0]:
+        xy = xy[::-1]
+    dx = np.diff(xy[:, 0])
+    if (dx <= 0).any():
+        k = int(np.flatnonzero(dx <= 0)[0]) + 1
+        raise _fail(
+            source,
+            f"layer {layer}: the water table ({_describe(e)}) turns back at {_pt(xy[k])}",
+            "draw it from left to right, one level per x",
+            "layers.water",
+        )
+    return xy
+
+
+# ------------------------------------------------------------------ cutting
+def cut_section(section: Section, *, max_blocks: int | None = None) -> SectionBlocks:
+    """Cut the section into blocks along its joint traces.
+
+    The faces of the arrangement of the outline, the fixed regions and the
+    traces are the blocks; faces in fixed regions are merged into one ground
+    block per connected region.  The cut is made about a local origin (the
+    outline's lowest-left corner) and moved back.
+
+    Raises
+    ------
+    DxfError
+        A fixed region apart from the section, a section left with no free
+        block, more blocks than ``max_blocks``.
+    """
+    import shapely
+
+    from ..blocks import GEOMETRY_RTOL
+    from ..geometry import _topology as topo
+
+    source = section.source
+    origin = section.outline.min(axis=0)
+    outline = shapely.Polygon(section.outline - origin)
+    fixed = [shapely.Polygon(f - origin) for f in section.fixed]
+    domain = shapely.union_all([outline, *fixed])
+    if domain.geom_type != "Polygon":
+        areas = [(k, shapely.intersection(f, outline).area) for k, f in enumerate(fixed)]
+        apart = [k for k, a in areas if a <= 0 and not shapely.touches(fixed[k], outline)]
+        which = f"fixed region {apart[0] + 1}" if apart else "the fixed ground"
+        raise _fail(
+            source,
+            f"{which} lies apart from the outline",
+            "draw the fixed ground inside the outline or along its edge",
+            "layers.fixed",
+        )
+    xmin, ymin, xmax, ymax = domain.bounds
+    extent = math.hypot(xmax - xmin, ymax - ymin)
+    tol = GEOMETRY_RTOL * extent
+    lines = [shapely.LinearRing(outline.exterior), *(f.exterior for f in fixed)]
+    lines += [shapely.LineString(t.points - origin) for t in section.traces]
+    noded = shapely.node(shapely.multilinestrings(shapely.get_parts(np.array(lines, object))))
+    faces = shapely.get_parts(shapely.polygonize(shapely.get_parts(noded)))
+    inside = shapely.buffer(domain, tol, join_style="mitre")
+    shapely.prepare(inside)
+    keep = shapely.contains(inside, faces) & (shapely.area(faces) > 1e-12 * extent**2)
+    faces = faces[keep]
+    ground_area = shapely.union_all(fixed)
+    shapely.prepare(ground_area)
+    in_ground = shapely.contains(ground_area, shapely.point_on_surface(faces))
+    thin = 2 * tol
+    if ((shapely.area(faces) <= thin * shapely.length(faces)) & ~in_ground).any():
+        faces, where, _ = topo.merge_slivers(faces, 0.0, movable=~in_ground, thin=thin)
+        moved = np.zeros(len(faces), dtype=bool)
+        moved[where[in_ground]] = True
+        in_ground = moved
+    free = faces[~in_ground]
+    if len(free) == 0:
+        raise _fail(
+            source,
+            "the fixed ground covers the whole section: no free block",
+            "draw the fixed regions around the ground only",
+            "layers.fixed",
+        )
+    if max_blocks is not None and len(free) > max_blocks:
+        raise _fail(
+            source,
+            f"the traces cut {len(free):,} blocks, more than the limit of {max_blocks:,}",
+            "raise the limit with `rockdem --max-blocks N ...` or draw fewer traces",
+        )
+    cen = shapely.get_coordinates(shapely.centroid(free))
+    key = np.round(cen / (1e-6 * extent))  # ties within round-off sort the same anywhere
+    free = free[np.lexsort((key[:, 1], key[:, 0]))]
+    fxy, foff = topo.to_arrays(free, tol)
+    polygons = [fxy[foff[i] : foff[i + 1]] + origin for i in range(len(free))]
+    ground = shapely.get_parts(shapely.coverage_union_all(faces[in_ground]))
+    for g in ground:
+        # the traces' nodes on the ground's outline are no corners: drop them (simplify
+        # within the tolerance), then make every free block's corner on it a vertex
+        g = shapely.simplify(shapely.polygons(shapely.get_exterior_ring(g)), tol)
+        g = topo.insert_vertices(g, fxy, 10 * tol)
+        gxy, _ = topo.to_arrays(np.array([g], dtype=object), tol)
+        polygons.append(gxy + origin)
+    flags = np.zeros(len(polygons), dtype=bool)
+    flags[len(free) :] = True
+    segs = tuple(
+        (t.joint, t.points[k].copy(), t.points[k + 1].copy())
+        for t in section.traces
+        for k in range(len(t.points) - 1)
+    )
+    return SectionBlocks(polygons=tuple(polygons), fixed=flags, lines=segs)

@@ -1,0 +1,445 @@
+"""Sections from CAD (DXF in) and results out (VTK, GeoJSON, DXF): issue 14.
+
+The drawings are made here, in the test's folder, with ezdxf (the bundled
+example is made by examples/make_dxf.py the same way).
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+import rockdem as rd
+from rockdem.cli import EXIT_INPUT, app
+from rockdem.config import load_model, parse_model
+from rockdem.exchange.dxf_in import cut_section, example_dxf, read_section
+from rockdem.exchange.dxf_out import write_dxf, write_section_dxf
+from rockdem.exchange.model_file import model_text
+
+ezdxf = pytest.importorskip("ezdxf")
+runner = CliRunner()
+SITE = (5.0e5, 7.0e6)  # a mine grid / UTM northing
+
+
+def invoke(*args):
+    return runner.invoke(app, [str(a) for a in args])
+
+
+def refused(r, *fragments: str) -> str:
+    """Exit 2 and one line on stderr holding every fragment (no traceback)."""
+    assert r.exit_code == EXIT_INPUT, (r.exit_code, r.stdout, r.stderr)
+    lines = r.stderr.strip().splitlines()
+    assert len(lines) == 1, r.stderr
+    assert lines[0].startswith("error: ") and "Traceback" not in r.stderr
+    for fragment in fragments:
+        assert fragment in lines[0], lines[0]
+    return lines[0]
+
+
+# ------------------------------------------------------------------ a section
+def _line(p, dip, reach=40.0):
+    d = np.array([math.cos(math.radians(dip)), -math.sin(math.radians(dip))])
+    p = np.asarray(p, float)
+    return [tuple(p - reach * d), tuple(p + reach * d)]
+
+
+def parts(shift=(0.0, 0.0)):
+    """A 10 m slope (face 70 degrees), bedding at 30, two cross joints (one stops
+    inside the rock), ground below y = -3 and behind x = 1, a water table."""
+    sx, sy = shift
+
+    def move(points):
+        return [(x + sx, y + sy) for x, y in points]
+
+    outline = move([(0, -5), (24, -5), (24, 0), (14, 0), (10, 10), (0, 10)])
+    fixed = [
+        move([(0, -5), (24, -5), (24, -3), (0, -3)]),
+        move([(0, -3), (1, -3), (1, 10), (0, 10)]),
+        move([(22, -3), (24, -3), (24, 0), (22, 0)]),
+    ]
+    bedding = [move(_line((12, y), 30)) for y in (-1.0, 1.5, 4.0, 6.5)]
+    cross = [move(_line((6, 0), 100)), move([(9.0, 9.9), (9.3, 6.0)])]  # second: stops inside
+    water = move([(0, 6), (12, 0.5), (14, -0.5), (24, -1.5)])
+    return {
+        "outline": outline,
+        "fixed": fixed,
+        "traces": {"bedding": bedding, "cross": cross},
+        "water": water,
+    }
+
+
+def draw(folder: Path, name="section.dxf", shift=(0.0, 0.0), insunits=6, scale=1.0, **change):
+    p = parts(shift)
+    p.update(change)
+    if scale != 1.0:
+
+        def sc(points):
+            return [(x * scale, y * scale) for x, y in points]
+
+        p["outline"] = sc(p["outline"])
+        p["fixed"] = [sc(f) for f in p["fixed"]]
+        p["traces"] = {k: [sc(t) for t in v] for k, v in p["traces"].items()}
+        p["water"] = sc(p["water"]) if p.get("water") else None
+    return write_section_dxf(folder / name, insunits=insunits, as_lines=("bedding",), **p)
+
+
+MODEL = """\
+units: kN, m, kPa
+materials: {rock: {unit_weight: 26}}
+joints:
+  bedding: {normal_stiffness: 1.0e+6, friction_angle: 32}
+  cross: {normal_stiffness: 1.0e+6, friction_angle: 40, cohesion: 10}
+geometry: {dxf: section.dxf}
+loads: {water_unit_weight: 9.81}
+"""
+
+
+def outlines(model):
+    b = model.blocks
+    return [b.outline(i) for i in range(b.n_blocks)]
+
+
+# ------------------------------------------------------------------ DXF in
+def test_the_imported_model_file_loads_and_gives_the_blocks_cut(tmp_path):
+    dxf = draw(tmp_path)
+    (tmp_path / "model.yaml").write_text(MODEL)
+    text, section, blocks = model_text(dxf, template=tmp_path / "model.yaml")
+    out = tmp_path / "imported.yaml"
+    out.write_text(text)
+    imported, cfg = load_model(out)
+    drawn, _ = load_model(tmp_path / "model.yaml")  # geometry: {dxf: ...}
+    assert cfg.blocks is not None and cfg.geometry is None
+    assert imported.blocks.n_blocks == len(blocks.polygons) == drawn.blocks.n_blocks
+    for a, b, c in zip(outlines(imported), blocks.polygons, outlines(drawn), strict=True):
+        assert np.array_equal(a, b) and np.array_equal(a, c)  # the very same floats
+    assert imported.blocks.fixed.tolist() == blocks.fixed.tolist()
+    assert blocks.fixed.sum() == 1  # the three ground regions touch: one ground block
+    # the cross trace that stops inside the rock cuts nothing but is a joint line
+    assert len(blocks.lines) == 6 and sum(j == "cross" for j, *_ in blocks.lines) == 2
+    assert imported.loads.water_table == drawn.loads.water_table
+    assert len(imported.loads.water_table) == 4
+    # the free blocks tile the section minus the ground
+    import shapely
+
+    sec = shapely.Polygon(section.outline)
+    ground = shapely.union_all([shapely.Polygon(f) for f in section.fixed])
+    free = imported.blocks.area[~imported.blocks.fixed].sum()
+    assert free == pytest.approx(shapely.difference(sec, ground).area, rel=1e-12)
+    ra, rb = rd.analyse(imported), rd.analyse(drawn)
+    assert ra.stable == rb.stable
+    assert np.array_equal(ra.displacement, rb.displacement)
+
+
+def test_site_coordinates_give_the_same_blocks(tmp_path):
+    near, far = tmp_path / "near", tmp_path / "far"
+    near.mkdir()
+    far.mkdir()
+    for folder, shift in ((near, (0.0, 0.0)), (far, SITE)):
+        draw(folder, shift=shift)
+        (folder / "model.yaml").write_text(MODEL)
+    a, _ = load_model(near / "model.yaml")
+    b, _ = load_model(far / "model.yaml")
+    size = a.blocks.extent
+    assert b.blocks.n_blocks == a.blocks.n_blocks
+    assert b.blocks.fixed.tolist() == a.blocks.fixed.tolist()
+    for pa, pb in zip(outlines(a), outlines(b), strict=True):
+        assert pa.shape == pb.shape
+        assert np.abs(pb - np.asarray(SITE) - pa).max() <= 1e-9 * size
+    assert np.max(np.abs(b.blocks.area - a.blocks.area)) <= 1e-9 * size**2
+    ra, rb = rd.analyse(a), rd.analyse(b)
+    assert ra.system.interfaces.n_interfaces == rb.system.interfaces.n_interfaces
+    assert ra.stable == rb.stable
+    assert ra.unstable_blocks.tolist() == rb.unstable_blocks.tolist()
+    assert np.allclose(rb.displacement, ra.displacement, rtol=1e-6, atol=1e-9 * size)
+    # the outline's vertices come back bit for bit at site coordinates
+    section = read_section(far / "section.dxf")
+    corners = {tuple(p) for p in section.outline.tolist()}
+    on_blocks = {tuple(p) for poly in outlines(b) for p in poly.tolist()}
+    assert corners <= on_blocks
+
+
+def test_insunits_millimetres_are_converted_to_metres(tmp_path):
+    metres = draw(tmp_path, "m.dxf", shift=SITE)
+    mm = draw(tmp_path, "mm.dxf", shift=SITE, insunits=4, scale=1000.0)
+    a = cut_section(read_section(metres))
+    s = read_section(mm)
+    b = cut_section(s)
+    assert s.insunits == 4 and s.scale == pytest.approx(1e-3)
+    assert len(a.polygons) == len(b.polygons)
+    size = read_section(metres).extent
+    for pa, pb in zip(a.polygons, b.polygons, strict=True):
+        assert np.abs(pa - pb).max() <= 1e-9 * size
+    # a unitless drawing is read in model units, as it is
+    raw = draw(tmp_path, "raw.dxf", insunits=0)
+    assert read_section(raw).scale == 1.0
+
+
+def _traces(path: Path) -> dict[str, list[np.ndarray]]:
+    """Segments on the JOINT_ layers of a drawing (LINEs and polyline pieces)."""
+    doc = ezdxf.readfile(path)
+    out: dict[str, list[np.ndarray]] = {}
+    for e in doc.modelspace():
+        layer = e.dxf.layer
+        if not layer.upper().startswith("JOINT_"):
+            continue
+        if e.dxftype() == "LINE":
+            pts = [e.dxf.start, e.dxf.end]
+        else:
+            pts = list(e.vertices_in_wcs())
+        xy = np.array([(p[0], p[1]) for p in pts])
+        out.setdefault(layer[6:], []).extend(np.stack([xy[:-1], xy[1:]], axis=1))
+    return out
+
+
+@pytest.mark.parametrize("shift", [(0.0, 0.0), SITE, (-3.2e5, 4.1e6)])
+def test_dxf_model_dxf_round_trip_keeps_every_trace(tmp_path, shift):
+    dxf = draw(tmp_path, shift=shift)
+    (tmp_path / "model.yaml").write_text(MODEL)
+    text, section, _ = model_text(dxf, template=tmp_path / "model.yaml")
+    (tmp_path / "imported.yaml").write_text(text)
+    model, _ = load_model(tmp_path / "imported.yaml")
+    back = write_dxf(tmp_path / "back.dxf", model)
+    before, after = _traces(dxf), _traces(back)
+    size = section.extent
+    assert sorted(before) == sorted(after) == ["bedding", "cross"]
+    for joint, segs in before.items():
+        got = np.array(after[joint])
+        assert len(got) == len(segs)
+        for seg in segs:  # every drawn trace is in the drawing written back
+            err = np.abs(got - seg).max(axis=(1, 2))
+            assert err.min() <= 1e-9 * size, (joint, seg, err.min())
+    # and the blocks drawn back are the model's
+    doc = ezdxf.readfile(back)
+    drawn = [
+        np.array([(p[0], p[1]) for p in e.vertices_in_wcs()])
+        for e in doc.modelspace().query("LWPOLYLINE")
+        if e.dxf.layer in ("BLOCKS", "FIXED")
+    ]
+    assert len(drawn) == model.blocks.n_blocks
+    for poly, outline in zip(drawn, outlines(model), strict=True):
+        assert np.abs(poly - outline).max() <= 1e-9 * size
+
+
+def test_the_bundled_example_imports_and_runs(tmp_path):
+    out = tmp_path / "example.yaml"
+    r = invoke("import", "--example", "--bolt-force", "150", "--out", out)
+    assert r.exit_code == 0, r.stderr
+    assert "free blocks" in r.stderr and "2 bolts" in r.stderr and "a water table" in r.stderr
+    model, cfg = load_model(out)
+    assert len(cfg.supports) == 2 and cfg.loads.water_table
+    assert model.blocks.n_blocks > 20 and model.blocks.fixed.sum() == 1
+    assert model.blocks.centroid[:, 0].min() > 1000  # site coordinates kept
+    # the committed drawing is what examples/make_dxf.py makes
+    import runpy
+
+    script = Path(__file__).resolve().parents[1] / "examples" / "make_dxf.py"
+    made = runpy.run_path(str(script))["main"](str(tmp_path / "made.dxf"))
+    a, b = read_section(example_dxf()), read_section(made)
+    assert np.array_equal(a.outline, b.outline)
+    assert [t.points.tolist() for t in a.traces] == [t.points.tolist() for t in b.traces]
+    # bolts pull into the slope from their heads on the face
+    assert all(90 < abs(s.angle) < 270 or s.angle < -90 for s in cfg.supports)
+
+
+def test_import_prints_the_model_without_out_and_refuses_to_overwrite(tmp_path):
+    dxf = draw(tmp_path)
+    r = invoke("import", dxf)
+    assert r.exit_code == 0, r.stderr
+    model, _ = parse_model(r.stdout)
+    assert model.blocks.n_blocks >= 5
+    assert "placeholders" in r.stderr  # no template: the joint properties must be edited
+    out = tmp_path / "m.yaml"
+    assert invoke("import", dxf, "-o", out).exit_code == 0
+    refused(invoke("import", dxf, "-o", out), "exists already", "--overwrite")
+    assert invoke("import", dxf, "-o", out, "--overwrite").exit_code == 0
+
+
+def test_layer_names_are_overridden_by_a_mapping(tmp_path):
+    dxf = draw(tmp_path)
+    doc = ezdxf.readfile(dxf)
+    doc.layers.get("FIXED").rename("GROUND")
+    doc.layers.get("JOINT_bedding").rename("BEDDING_PLANES")
+    doc.saveas(tmp_path / "renamed.dxf")
+    (tmp_path / "model.yaml").write_text(
+        MODEL.replace(
+            "geometry: {dxf: section.dxf}",
+            "geometry:\n  dxf: renamed.dxf\n  layers:\n    fixed: ground\n"
+            "    joints: {BEDDING_PLANES: bedding, JOINT_cross: cross}",
+        )
+    )
+    renamed, _ = load_model(tmp_path / "model.yaml")
+    (tmp_path / "plain.yaml").write_text(MODEL)
+    plain, _ = load_model(tmp_path / "plain.yaml")
+    assert [o.tolist() for o in outlines(renamed)] == [o.tolist() for o in outlines(plain)]
+    r = invoke(
+        "import",
+        tmp_path / "renamed.dxf",
+        "-l",
+        "fixed=GROUND",
+        "-j",
+        "BEDDING_PLANES=bedding",
+        "-j",
+        "JOINT_cross=cross",
+    )
+    assert r.exit_code == 0, r.stderr
+
+
+# ------------------------------------------------------------------ hostile drawings
+def _hostile(tmp_path: Path, case: str) -> Path:
+    path = tmp_path / f"{case}.dxf"
+    p = parts()
+    if case == "open-outline":
+        doc = ezdxf.new()
+        msp = doc.modelspace()
+        msp.add_lwpolyline(p["outline"], close=False, dxfattribs={"layer": "OUTLINE"})
+        msp.add_lwpolyline(p["fixed"][0], close=True, dxfattribs={"layer": "FIXED"})
+        doc.saveas(path)
+    elif case == "self-crossing-outline":
+        bow = [(0, -5), (24, 10), (24, -5), (0, 10)]
+        draw(tmp_path, path.name, outline=bow)
+    elif case == "self-crossing-trace":
+        zigzag = [(2, 8), (12, -2), (12, 8), (2, -2)]
+        draw(tmp_path, path.name, traces={"bedding": [zigzag]})
+    elif case == "no-fixed-layer":
+        draw(tmp_path, path.name, fixed=[])
+    elif case == "arc":
+        doc = ezdxf.readfile(draw(tmp_path, path.name))
+        doc.modelspace().add_lwpolyline(
+            [(2, 2, 0, 0, 0.5), (5, 5)], format="xyseb", dxfattribs={"layer": "JOINT_bedding"}
+        )
+        doc.saveas(path)
+    elif case == "spline":
+        doc = ezdxf.readfile(draw(tmp_path, path.name))
+        doc.modelspace().add_spline([(2, 2), (3, 4), (5, 5)], dxfattribs={"layer": "OUTLINE"})
+        doc.saveas(path)
+    elif case == "fixed-apart":
+        far = [(100, 0), (110, 0), (110, 5), (100, 5)]
+        draw(tmp_path, path.name, fixed=[*p["fixed"], far])
+    elif case == "water-turns-back":
+        draw(tmp_path, path.name, water=[(0, 6), (12, 1), (8, 0), (24, -1)])
+    elif case == "empty":
+        path.write_bytes(b"")
+    elif case == "blank-drawing":
+        ezdxf.new().saveas(path)
+    elif case == "not-dxf":
+        path.write_bytes(b"\x89PNG\r\n\x1a\n\x00\x00\x00\rIHDR" + bytes(range(256)))
+    elif case == "truncated":
+        text = draw(tmp_path, "whole.dxf").read_text()
+        path.write_text(text[: len(text) // 2])
+    elif case == "dwg":
+        path.write_bytes(b"AC1027\x00\x00\x00\x00binary")
+    return path
+
+
+HOSTILE = {
+    "open-outline": ("is open", "apart", "close the polyline"),
+    "self-crossing-outline": ("crosses itself at (12, 2.5)",),
+    "self-crossing-trace": ("layer JOINT_bedding", "crosses itself"),
+    "no-fixed-layer": ("no layer FIXED", "fixed ground"),
+    "arc": ("arcs (bulges)", "explode"),
+    "spline": ("SPLINE", "not a line or polyline"),
+    "fixed-apart": ("lies apart from the outline",),
+    "water-turns-back": ("water table", "turns back at (8, 0)"),
+    "empty": ("the file is empty",),
+    "blank-drawing": ("no layer OUTLINE",),
+    "not-dxf": ("not a DXF file",),
+    "truncated": ("incomplete", "EOF"),
+    "dwg": ("DWG",),
+}
+
+
+@pytest.mark.parametrize("case", sorted(HOSTILE))
+def test_a_hostile_drawing_gives_exit_2_and_one_line(tmp_path, case):
+    path = _hostile(tmp_path, case)
+    line = refused(invoke("import", path), path.name, *HOSTILE[case])
+    # the same drawing named by a model file: the same problem, at `geometry`
+    (tmp_path / "model.yaml").write_text(MODEL.replace("section.dxf", path.name))
+    line = refused(
+        invoke("check", tmp_path / "model.yaml"),
+        "model.yaml:",
+        "geometry",
+        path.name,
+        *HOSTILE[case],
+    )
+    assert line.count("error:") == 1
+
+
+def test_missing_file_unknown_layer_and_unknown_joint(tmp_path):
+    refused(invoke("import", tmp_path / "nope.dxf"), "nope.dxf: file not found")
+    refused(invoke("import", tmp_path), "is a folder", "give a DXF file")
+    dxf = draw(tmp_path)
+    refused(
+        invoke("import", dxf, "--layer", "fixed=GROUND"),
+        "no layer 'GROUND'",
+        "its layers:",
+        "FIXED",
+    )
+    refused(invoke("import", dxf, "--layer", "roof=R"), "layers.roof", "not a part")
+    refused(invoke("import", dxf, "-j", "JOINT_X=bedding"), "no layer 'JOINT_X'")
+    (tmp_path / "model.yaml").write_text(MODEL.replace("  cross:", "  crossing:"))
+    refused(
+        invoke("check", tmp_path / "model.yaml"),
+        "model.yaml",
+        "layer JOINT_cross",
+        "no joint 'cross'",
+    )
+    (tmp_path / "model.yaml").write_text(
+        MODEL.replace(
+            "{dxf: section.dxf}", "{dxf: section.dxf, layers: {joints: {JOINT_cross: nope}}}"
+        )
+    )
+    refused(
+        invoke("check", tmp_path / "model.yaml"),
+        "geometry.layers.joints.JOINT_cross",
+        "joint 'nope' is not defined",
+    )
+    (tmp_path / "model.yaml").write_text(MODEL.replace("section.dxf", "missing.dxf"))
+    refused(
+        invoke("check", tmp_path / "model.yaml"), "geometry.dxf", "missing.dxf", "file not found"
+    )
+    (tmp_path / "model.yaml").write_text(MODEL.replace("loads: {water_unit_weight: 9.81}", ""))
+    refused(invoke("check", tmp_path / "model.yaml"), "water table", "water_unit_weight")
+    (tmp_path / "model.yaml").write_text(MODEL + "blocks: [{vertices: [[0, 0], [1, 0], [1, 1]]}]\n")
+    refused(invoke("check", tmp_path / "model.yaml"), "not both blocks and geometry")
+
+
+def test_bolts_are_passive_bolts_or_anchors_pulling_from_the_face(tmp_path):
+    head = (11.0, 7.5)  # on the face (10, 10) - (14, 0): x = 10 + (10 - y) * 0.4
+    tail = (head[0] - 6.0, head[1] - 1.6)
+    dxf = draw(tmp_path, bolts=[(tail, head)])  # drawn from the far end: the head is found
+    refused(invoke("import", dxf), "1 bolts but neither", "--bolt-force", "--bolt-capacity")
+    (tmp_path / "model.yaml").write_text(MODEL)
+    refused(invoke("check", tmp_path / "model.yaml"), "geometry.bolt", "geometry.bolt_force")
+    angle = math.degrees(math.atan2(tail[1] - head[1], tail[0] - head[0]))
+    # active anchors
+    anchors = MODEL.replace("section.dxf}", "section.dxf, bolt_force: 80}")
+    (tmp_path / "model.yaml").write_text(anchors)
+    model, cfg = load_model(tmp_path / "model.yaml")
+    (bolt,) = [p for p in model.loads.points if p.name == "drawn bolt 1"]
+    assert (bolt.x, bolt.y) == head
+    assert math.hypot(bolt.fx, bolt.fy) == pytest.approx(80)
+    assert math.degrees(math.atan2(bolt.fy, bolt.fx)) == pytest.approx(angle)
+    assert cfg.supports == []  # the echo keeps the file as written
+    # passive bolts: head, direction and length from the drawing
+    passive = MODEL.replace(
+        "section.dxf}", "section.dxf, bolt: {capacity: 150, axial_stiffness: 1.0e+5}}"
+    )
+    (tmp_path / "model.yaml").write_text(passive)
+    model, _ = load_model(tmp_path / "model.yaml")
+    (bolt,) = model.bolts
+    assert tuple(bolt.head) == head and bolt.capacity == 150
+    assert bolt.angle == pytest.approx(angle) and bolt.length == pytest.approx(math.hypot(6, 1.6))
+    # the imported file says the same
+    r = invoke("import", dxf, "--bolt-capacity", "150", "--bolt-stiffness", "1e5")
+    assert r.exit_code == 0, r.stderr
+    imported, _ = parse_model(r.stdout)
+    (same,) = imported.bolts
+    assert tuple(same.head) == tuple(bolt.head) and same.angle == bolt.angle
+    assert same.length == bolt.length
+    both = passive.replace("section.dxf,", "section.dxf, bolt_force: 80,")
+    (tmp_path / "model.yaml").write_text(both)
+    refused(invoke("check", tmp_path / "model.yaml"), "both `bolt` and `bolt_force`")
