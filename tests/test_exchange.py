@@ -6,6 +6,7 @@ example is made by examples/make_dxf.py the same way).
 
 from __future__ import annotations
 
+import json
 import math
 from pathlib import Path
 
@@ -19,6 +20,7 @@ from rockdem.config import load_model, parse_model
 from rockdem.exchange.dxf_in import cut_section, example_dxf, read_section
 from rockdem.exchange.dxf_out import write_dxf, write_section_dxf
 from rockdem.exchange.model_file import model_text
+from rockdem.output import RESULT_FILES
 
 ezdxf = pytest.importorskip("ezdxf")
 runner = CliRunner()
@@ -443,3 +445,158 @@ def test_bolts_are_passive_bolts_or_anchors_pulling_from_the_face(tmp_path):
     both = passive.replace("section.dxf,", "section.dxf, bolt_force: 80,")
     (tmp_path / "model.yaml").write_text(both)
     refused(invoke("check", tmp_path / "model.yaml"), "both `bolt` and `bolt_force`")
+
+
+# ------------------------------------------------------------------ results out
+@pytest.fixture(scope="module")
+def fos_results(tmp_path_factory):
+    """`rockdem fos --out DIR --format all` of the drawn section (unstable at F ~ 1.1)."""
+    folder = tmp_path_factory.mktemp("fos")
+    draw(folder)
+    (folder / "model.yaml").write_text(MODEL)
+    out = folder / "out"
+    r = invoke(
+        "fos",
+        folder / "model.yaml",
+        "--out",
+        out,
+        "--format",
+        "vtk,geojson",
+        "--format",
+        "dxf",
+        "--quiet",
+    )
+    assert r.exit_code == 0, r.stderr
+    model, _ = load_model(folder / "model.yaml")
+    return out, model
+
+
+def _rows(out: Path, table: str) -> list[dict]:
+    return json.loads((out / "result.json").read_text())[table]
+
+
+def test_vtk_files_read_back_with_their_cells_and_fields(fos_results):
+    meshio = pytest.importorskip("meshio")
+    out, model = fos_results
+    blocks, faces = _rows(out, "blocks"), _rows(out, "interfaces")
+    mesh = meshio.read(out / "blocks.vtu")
+    b = model.blocks
+    assert sum(len(c.data) for c in mesh.cells) == b.n_blocks
+    assert all(c.type == "polygon" for c in mesh.cells)
+    assert len(mesh.points) == len(b.vertices)  # every block its own vertices
+    ids = np.concatenate(mesh.cell_data["block_id"])
+    assert ids.tolist() == [row["id"] for row in blocks]
+    disp = np.concatenate(mesh.cell_data["displacement"])
+    assert np.array_equal(disp[:, 0], [row["ux"] for row in blocks])
+    assert np.array_equal(disp[:, 1], [row["uy"] for row in blocks])
+    modes = np.concatenate(mesh.cell_data["failure_mode"])
+    unstable = np.concatenate(mesh.cell_data["unstable"])
+    expect = [-1 if r["fixed"] else rd.modes.MODES.index(r["failure_mode"]) for r in blocks]
+    assert modes.tolist() == expect
+    assert (unstable == 1).sum() >= 1  # the mechanism at the limit
+    assert ((unstable == 1) == (modes > 0)).all()
+    # vertex displacement: the block's rigid motion at the vertex
+    k = int(np.argmax(np.abs(disp[:, 0]) + np.abs(disp[:, 1])))
+    conn = np.concatenate([c.data.reshape(-1) for c in mesh.cells])  # cells in block order
+    v = conn[model.blocks.offsets[k]]  # block k's first vertex
+    rot = blocks[k]["rotation"]
+    c = model.blocks.centroid[k]
+    u = mesh.point_data["displacement"][v]
+    p = mesh.points[v]
+    assert u[0] == pytest.approx(blocks[k]["ux"] - rot * (p[1] - c[1]), abs=1e-15)
+    assert u[1] == pytest.approx(blocks[k]["uy"] + rot * (p[0] - c[0]), abs=1e-15)
+    lines = meshio.read(out / "interfaces.vtu")
+    assert [c.type for c in lines.cells] == ["line"]
+    assert len(lines.cells[0].data) == len(faces) and len(lines.points) == 2 * len(faces)
+    sn = lines.cell_data["normal_stress"][0]
+    assert np.array_equal(sn, [row["normal_stress"] for row in faces])
+    state = lines.cell_data["state"][0]
+    assert state.tolist() == [("elastic", "shear", "tension").index(r["state"]) for r in faces]
+    assert (state > 0).any()
+    start = lines.points[lines.cells[0].data[:, 0], :2]
+    assert np.allclose(start, [[r["start_x"], r["start_y"]] for r in faces], rtol=0, atol=0)
+
+
+def test_geojson_is_valid_and_counts_every_feature(fos_results):
+    out, model = fos_results
+    data = json.loads((out / "section.geojson").read_text())
+    assert data["type"] == "FeatureCollection"
+    layers = [f["properties"]["layer"] for f in data["features"]]
+    n_faces = len(_rows(out, "interfaces"))
+    assert layers.count("block") == model.blocks.n_blocks
+    assert layers.count("joint") == len(model.joint_lines)
+    assert layers.count("interface") == n_faces
+    assert layers.count("water_table") == 1
+    assert len(data["features"]) == model.blocks.n_blocks + len(model.joint_lines) + n_faces + 1
+    for f in data["features"]:
+        assert f["type"] == "Feature" and set(f) >= {"geometry", "properties"}
+        if f["geometry"]["type"] == "Polygon":
+            ring = np.array(f["geometry"]["coordinates"][0])
+            assert (ring[0] == ring[-1]).all() and len(ring) >= 4
+            x, y = ring[:-1].T
+            assert np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y) > 0  # counter-clockwise
+    unstable = [
+        f["properties"]["id"]
+        for f in data["features"]
+        if f["properties"]["layer"] == "block" and f["properties"]["unstable"]
+    ]
+    assert unstable == sorted(json.loads((out / "result.json").read_text())["mechanism_blocks"])
+
+
+def test_result_dxf_has_unstable_blocks_and_failed_joints_on_their_layers(fos_results):
+    out, model = fos_results
+    doc = ezdxf.readfile(out / "result.dxf")
+    msp = doc.modelspace()
+    count = {}
+    for e in msp:
+        count[e.dxf.layer] = count.get(e.dxf.layer, 0) + 1
+    mech = json.loads((out / "result.json").read_text())["mechanism_blocks"]
+    failed = [r for r in _rows(out, "interfaces") if r["state"] != "elastic"]
+    assert count["UNSTABLE"] == len(mech) >= 1
+    assert count["FAILED_JOINTS"] == len(failed) >= 1
+    assert count["BLOCKS"] + count["FIXED"] == model.blocks.n_blocks
+    assert count["BLOCK_IDS"] == model.blocks.n_blocks
+    assert count["WATER"] == 1
+    assert doc.header["$INSUNITS"] == 6  # metres, from `units`
+    drawn = sorted(
+        tuple(np.round([(p[0], p[1]) for p in e.vertices_in_wcs()], 9).ravel())
+        for e in msp.query('LWPOLYLINE[layer=="UNSTABLE"]')
+    )
+    b = model.blocks
+    index = b.index_of(mech)
+    assert drawn == sorted(tuple(np.round(b.outline(int(i)), 9).ravel()) for i in index)
+
+
+def test_format_options(tmp_path, fos_results):
+    out, _ = fos_results
+    assert not (out / "springs.vtu").exists()
+    (tmp_path / "box.yaml").write_text((out.parent / "model.yaml").read_text())
+    draw(tmp_path)
+    refused(invoke("run", tmp_path / "box.yaml", "--format", "vtk"), "--format", "needs --out")
+    refused(
+        invoke("run", tmp_path / "box.yaml", "--out", tmp_path / "o", "--format", "png"),
+        "'png' is not a result format",
+    )
+    r = invoke(
+        "run", tmp_path / "box.yaml", "--out", tmp_path / "o", "--format", "csv,geojson", "-q"
+    )
+    assert r.exit_code == 0, r.stderr
+    written = {p.name for p in (tmp_path / "o").iterdir()}
+    assert written - set(RESULT_FILES) == {"section.geojson"}
+    # existing exchange files are not replaced without --overwrite, with nothing written
+    refused(
+        invoke("run", tmp_path / "box.yaml", "--out", tmp_path / "o", "--format", "geojson"),
+        "already holds",
+    )
+    r = invoke(
+        "run",
+        tmp_path / "box.yaml",
+        "--out",
+        tmp_path / "o",
+        "--format",
+        "all",
+        "--overwrite",
+        "-q",
+    )
+    assert r.exit_code == 0, r.stderr
+    assert (tmp_path / "o" / "blocks.vtu").exists() and (tmp_path / "o" / "result.dxf").exists()

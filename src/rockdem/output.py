@@ -392,8 +392,13 @@ def fos_summary(fos) -> dict[str, Any]:
 
 
 # --------------------------------------------------------------- writing
-def check_output_dir(folder: str | Path, *, overwrite: bool = False) -> Path:
+def check_output_dir(
+    folder: str | Path, *, overwrite: bool = False, extra_files: tuple[str, ...] = ()
+) -> Path:
     """Fail early if results cannot be written to ``folder``.
+
+    ``extra_files`` are the files of the exchange formats asked for
+    (:mod:`rockdem.exchange.results`), checked like the others.
 
     Raises
     ------
@@ -403,8 +408,13 @@ def check_output_dir(folder: str | Path, *, overwrite: bool = False) -> Path:
     folder = Path(folder)
     if folder.exists() and not folder.is_dir():
         raise InputError(f"--out {folder}", "is a file, not a folder", "give a folder")
+    for name in extra_files:
+        if (folder / name).is_dir():
+            raise InputError(
+                f"--out {folder}", f"{name} is a folder", "remove it or write to another folder"
+            )
     if not overwrite:
-        for name in RESULT_FILES:
+        for name in (*RESULT_FILES, *extra_files):
             if (folder / name).exists():
                 raise InputError(
                     f"--out {folder}",
@@ -504,6 +514,8 @@ def write_results(
     *,
     overwrite: bool = False,
     units=None,
+    extra_files: tuple[str, ...] = (),
+    write_extra=None,
 ) -> list[Path]:
     """Write the result files into ``folder``, all or nothing.
 
@@ -522,13 +534,17 @@ def write_results(
         The model's units (:func:`rockdem.units.parse_units`): CSV headings
         carry them (``"normal_stress [kPa]"``) and ``result.json`` gets a
         ``column_units`` map; without a known system the headings are bare.
+    extra_files, write_extra : optional
+        More files (VTK, GeoJSON, DXF: :mod:`rockdem.exchange.results`), and
+        the function that writes them into the temporary folder; they are
+        moved into place with the others.
 
     Returns
     -------
     list of Path
         The files written.
     """
-    folder = check_output_dir(folder, overwrite=overwrite)
+    folder = check_output_dir(folder, overwrite=overwrite, extra_files=extra_files)
     parent = folder.parent
     parent.mkdir(parents=True, exist_ok=True)
     tmp = Path(tempfile.mkdtemp(prefix=f".{folder.name}.", suffix=".tmp", dir=parent))
@@ -548,6 +564,8 @@ def write_results(
         with (tmp / "result.json").open("w", encoding="utf-8") as fh:
             json.dump(jsonable(doc), fh, indent=1, allow_nan=False)
             fh.write("\n")
+        if write_extra is not None:
+            write_extra(tmp)
         if not folder.exists():
             try:
                 os.rename(tmp, folder)
@@ -555,9 +573,9 @@ def write_results(
             except OSError:  # created meanwhile: fall back to moving file by file
                 folder.mkdir(exist_ok=True)
         if tmp is not None:
-            for name in RESULT_FILES:
+            for name in (*RESULT_FILES, *extra_files):
                 os.replace(tmp / name, folder / name)
     finally:
         if tmp is not None:
             shutil.rmtree(tmp, ignore_errors=True)
-    return [folder / name for name in RESULT_FILES]
+    return [folder / name for name in (*RESULT_FILES, *extra_files)]

@@ -4,8 +4,9 @@ printed, as JSON, or as result files."""
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any
+from typing import Annotated, Any
 
+import typer
 from rich.markup import escape
 from rich.table import Table
 
@@ -31,6 +32,37 @@ from .common import (
     out,
 )
 
+FormatOpt = Annotated[
+    list[str] | None,
+    typer.Option(
+        "--format",
+        help="Also write these formats into --out: vtk (blocks.vtu, interfaces.vtu for "
+        "ParaView), geojson (section.geojson for GIS), dxf (result.dxf for CAD), or all; "
+        "comma-separated or repeated.  CSV and JSON are always written.",
+        metavar="FORMATS",
+        show_default=False,
+    ),
+]
+
+
+def _formats(values: list[str] | None, out_dir: Path | None) -> tuple[str, ...]:
+    """The exchange formats asked for (rockdem.exchange.results); they need --out."""
+    if not values:
+        return ()
+    from ..errors import InputError
+    from ..exchange.results import parse_formats
+
+    formats = parse_formats(values)
+    if formats and out_dir is None:
+        raise InputError("--format", "needs --out DIR", "give the folder to write the files into")
+    return formats
+
+
+def _format_files(formats: tuple[str, ...]) -> tuple[str, ...]:
+    from ..exchange.results import format_files
+
+    return format_files(formats) if formats else ()
+
 
 def run(
     model: ModelArg = None,
@@ -40,6 +72,7 @@ def run(
     json_: JsonOpt = False,
     quiet: QuietOpt = False,
     debug: DebugOpt = False,
+    format_: FormatOpt = None,
 ) -> None:
     """Staged gravity analysis: the verdict, the failed joints and the unstable blocks.
 
@@ -53,9 +86,10 @@ def run(
         # rockdem.cli._step_hook and rockdem.cli._trial_hook stay patchable
         from . import _step_hook
 
+        formats = _formats(format_, out_dir)
         path, m, cfg = _load(model, example)
         if out_dir is not None:
-            check_output_dir(out_dir, overwrite=overwrite)
+            check_output_dir(out_dir, overwrite=overwrite, extra_files=_format_files(formats))
         with _progress(quiet, "load steps") as bar:
             task = bar.add_task("load steps", total=m.settings.load_steps)
             result = analyse(m, progress=_step_hook(bar, task))
@@ -64,7 +98,16 @@ def run(
         doc = {**_header(path, m, cfg), **_units(units), "command": "run", **summary}
         if out_dir is not None:
             echo = {"model": cfg.model_dump(mode="json")}
-            _write(out_dir, result, {**doc, **echo}, overwrite, quiet or json_, units=units)
+            _write(
+                out_dir,
+                result,
+                {**doc, **echo},
+                overwrite,
+                quiet or json_,
+                units=units,
+                formats=formats,
+                units_note=cfg.units,
+            )
         if json_:
             _echo_json(doc)
             return
@@ -79,11 +122,23 @@ def _write(
     quiet: bool,
     modes=None,
     units=None,
+    formats: tuple[str, ...] = (),
+    units_note: str = "",
 ):
     from ..output import analysis_tables, write_results
 
     tables = analysis_tables(analysis, modes)
-    files = write_results(folder, tables, document, overwrite=overwrite, units=units)
+    extra: dict[str, Any] = {}
+    if formats:  # VTK, GeoJSON, DXF beside the tables (rockdem.exchange)
+        from ..exchange.results import result_writer
+
+        extra = {
+            "extra_files": _format_files(formats),
+            "write_extra": result_writer(
+                formats, analysis, tables, modes=modes, units=units, units_note=units_note
+            ),
+        }
+    files = write_results(folder, tables, document, overwrite=overwrite, units=units, **extra)
     if not quiet:
         err.print(f"results written to {escape(str(folder))}/ ({', '.join(f.name for f in files)})")
 
@@ -226,6 +281,7 @@ def fos(
     json_: JsonOpt = False,
     quiet: QuietOpt = False,
     debug: DebugOpt = False,
+    format_: FormatOpt = None,
 ) -> None:
     """Factor of safety by shear strength reduction: the value and its bracket.
 
@@ -241,9 +297,10 @@ def fos(
         # rockdem.cli._step_hook and rockdem.cli._trial_hook stay patchable
         from . import _trial_hook
 
+        formats = _formats(format_, out_dir)
         path, m, cfg = _load(model, example)
         if out_dir is not None:
-            check_output_dir(out_dir, overwrite=overwrite)
+            check_output_dir(out_dir, overwrite=overwrite, extra_files=_format_files(formats))
         with _progress(quiet, "strength reduction") as bar:
             task = bar.add_task("strength reduction trials", total=None)
             result = factor_of_safety(m, **_fos_options(cfg), progress=_trial_hook(bar, task))
@@ -257,7 +314,17 @@ def fos(
             extra = {"analysis": analysis_summary(state), "model": cfg.model_dump(mode="json")}
             # the tables describe the last equilibrium; failure_mode is the limit's
             modes = failure_modes(result.failed_analysis) if result.failed_analysis else None
-            _write(out_dir, state, {**doc, **extra}, overwrite, quiet or json_, modes, units)
+            _write(
+                out_dir,
+                state,
+                {**doc, **extra},
+                overwrite,
+                quiet or json_,
+                modes,
+                units,
+                formats=formats,
+                units_note=cfg.units,
+            )
         if json_:
             _echo_json(doc)
             return
