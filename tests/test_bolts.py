@@ -255,3 +255,40 @@ def test_pictures_and_report_show_the_bolts(tmp_path):
     path = write_report(an.system.model, tmp_path, analysis=an, compute_fos=False, animation=False)
     html = path.read_text()
     assert "<h3>Bolts at F = 1</h3>" in html and 'class="bolts"' in html
+
+
+# ------------------------------------------------------------ bolt pattern design
+def test_bolt_pattern_reaches_the_target_with_the_widest_spacing():
+    """perpendicular-joints (FS 0.90): rows on the mechanism's face reach 1.1;
+    the spacing found holds at the target and the next wider one tried does not."""
+    from rockdem.config import load_model
+    from rockdem.examples import example_path
+    from rockdem.stabilisation.bolting import bolt_pattern
+    from rockdem.stabilisation.removal import stable_at
+
+    model, _ = load_model(example_path("perpendicular-joints"))
+    p = bolt_pattern(model, 1.1, capacity=2.0, axial_stiffness=1e4)
+    assert p.spacing is not None and p.fos.value >= 1.1
+    assert stable_at(p.model, 1.1)
+    lo_bad = p.bracket[0]
+    if np.isfinite(lo_bad):  # a wider spacing was tried and fell short
+        wider = model.replace(bolts=[Bolt(**{**b.__dict__, "spacing": lo_bad}) for b in p.bolts])
+        assert not stable_at(wider, 1.1)
+    # every bolt passes through the moving rock and anchors beyond it
+    assert all(b.length > 1.0 for b in p.bolts)
+
+
+def test_measures_compare_a_bolt_pattern():
+    from rockdem.config import load_model
+    from rockdem.examples import example_path
+    from rockdem.stabilisation import compare_measures
+
+    model, _ = load_model(example_path("perpendicular-joints"))
+    c = compare_measures(
+        model, 1.1, bolting=dict(capacity=20, axial_stiffness=1e4), support=False, removal=False
+    )
+    kinds = [r["kind"] for r in c.rows()]
+    assert kinds == ["none", "bolts"]
+    bolt_row = c.rows()[1]
+    assert bolt_row["reaches_target"] and bolt_row["factor_of_safety"] >= 1.1
+    assert "rows of bolts" in bolt_row["note"]

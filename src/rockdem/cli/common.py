@@ -15,7 +15,9 @@ from rich.markup import escape
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
 from .. import __version__
+from ..exchange.results import FORMATS
 from ..geometry.size import MAX_BLOCKS
+from ..output import RESULT_FILES
 
 EXIT_OK, EXIT_FAILED, EXIT_INPUT = 0, 1, 2
 
@@ -24,8 +26,9 @@ _ROOT: dict[str, Any] = {"max_blocks": MAX_BLOCKS}
 
 #: The files each command writes into its ``--out`` folder (glob patterns allowed).
 _WRITES: dict[str, tuple[str, ...]] = {
-    "run": ("blocks.csv", "interfaces.csv", "springs.csv", "result.json"),
-    "fos": ("blocks.csv", "interfaces.csv", "springs.csv", "result.json"),
+    # the result files and those of --format (VTK, GeoJSON, DXF)
+    "run": (*RESULT_FILES, *(f for files in FORMATS.values() for f in files)),
+    "fos": (*RESULT_FILES, *(f for files in FORMATS.values() for f in files)),
     "report": ("report.html",),
     "stabilise": (
         "stabilisation.json",

@@ -111,6 +111,28 @@ class SupportSearchSpec(_Section):
     """Give up above this force (default: twice the weight of the free rock)."""
 
 
+class BoltPatternSpec(_Section):
+    """A bolt for `rockdem stabilise` to size: rows on the face of the critical
+    mechanism at the widest spacing along the slope that reaches the target."""
+
+    capacity: Magnitude
+    """Axial yield force of one bolt."""
+    axial_stiffness: Magnitude
+    """Axial force per unit opening of a crossed joint, one bolt."""
+    angle: Direction = 195.0
+    """Direction from the head into the rock, degrees counter-clockwise from +x."""
+    row_spacing: Magnitude | None = None
+    """Distance between rows along the face (default: 4 rows, then 8 and 16)."""
+    length: Magnitude | None = None
+    """Bolt length (default: through the moving rock plus `anchorage`)."""
+    anchorage: Magnitude | None = None
+    """Length beyond the moving rock (default: half the depth through it)."""
+    bond_strength: Magnitude | None = None
+    """Grout bond force per unit length (null: the steel yields first)."""
+    kind: Literal["bolt", "cable"] = "bolt"
+    """`cable`: no compression and no dowel action."""
+
+
 class StageSpec(_Section):
     """One excavation stage (bench): what it removes."""
 
@@ -137,6 +159,9 @@ class StabilisationSpec(_Section):
     with the other measures."""
     support: SupportSearchSpec | None = None
     """Where to try a support force (null: on the critical mechanism, angle 195)."""
+    bolts: BoltPatternSpec | None = None
+    """A bolt to size in a pattern on the critical mechanism's face (null: no bolt row
+    in the comparison)."""
     trials: Annotated[list[TrialSpec], Field(max_length=MAX_DESIGNS)] = []
     """Removal designs to rate side by side (each from the model as it is)."""
     stages: Annotated[list[StageSpec], Field(max_length=MAX_DESIGNS)] = []

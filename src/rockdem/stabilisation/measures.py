@@ -186,6 +186,7 @@ def compare_measures(
     support_at: Sequence[float] | None = None,
     support_angle: float = DEFAULT_ANGLE,
     support: bool = True,
+    bolting: dict | None = None,
     removal: bool = True,
     max_removal: float = 0.3,
     max_rounds: int = 6,
@@ -201,6 +202,9 @@ def compare_measures(
     support_at, support_angle :
         Where and in which direction the support force acts (see
         :func:`support_force`); ``support=False`` skips it.
+    bolting : dict, optional
+        The bolt and its inclination for a bolt-pattern row
+        (:func:`rockdem.stabilisation.bolting.bolt_pattern` keywords).
     removal : bool
         Run :func:`stabilise` for the removal row.
     units : Units, optional
@@ -248,6 +252,8 @@ def compare_measures(
                     search.model,
                 )
             )
+    if bolting is not None:
+        rows.append(_bolt_row(model, target_fos, bolting, width, force_unit))
     stab = None
     if removal:
         with _progress.stage("block removal"):
@@ -274,3 +280,31 @@ def compare_measures(
             )
         )
     return MeasureComparison(target_fos, tuple(rows), stab, search)
+
+
+def _bolt_row(model, target_fos, bolting: dict, width: float, force_unit: str) -> Measure:
+    """The bolt-pattern row: rows on the mechanism's face at the widest spacing
+    that reaches the target (:func:`rockdem.stabilisation.bolting.bolt_pattern`)."""
+    from .bolting import bolt_pattern
+
+    label = "bolt pattern"
+    with _progress.stage(label):
+        try:
+            p = bolt_pattern(model, target_fos, width=width, **bolting)
+        except InputError as exc:
+            return Measure("bolts", label, 0.0, None, None, False, exc.problem, None)
+    cap = f"{bolting['capacity']:.3g}{force_unit}"
+    if p.spacing is None:
+        note = (
+            f"not reached with up to 16 rows of bolts ({cap} capacity) 0.25 apart along "
+            "the slope (longer or stronger bolts, or another measure)"
+        )
+        return Measure("bolts", label, 0.0, None, None, False, note, None)
+    lengths = sorted(b.length for b in p.bolts)
+    widest = " (the widest tried)" if not np.isfinite(p.bracket[0]) else ""
+    note = (
+        f"{len(p.bolts)} rows of bolts ({cap} capacity), one every {p.spacing:.3g} along "
+        f"the slope{widest}, {lengths[0]:.3g} to {lengths[-1]:.3g} long: "
+        f"{p.bolts_per_metre:.3g} bolts per unit length of slope"
+    )
+    return Measure("bolts", label, 0.0, None, p.fos, meets(p.fos, target_fos), note, p.model)

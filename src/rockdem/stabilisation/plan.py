@@ -11,6 +11,8 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
+import numpy as np
+
 from ..model import Model
 from ..results import FactorOfSafety, format_factor
 from ..units import parse_units
@@ -150,6 +152,15 @@ def study(
         return _study(model, cfg, target_fos, support, stages, width)
 
 
+def _bolting(spec) -> dict | None:
+    """The bolt-pattern keywords of a `stabilisation.bolts` section."""
+    if spec is None:
+        return None
+    kw = spec.model_dump()
+    kw["bond_strength"] = np.inf if kw["bond_strength"] is None else kw["bond_strength"]
+    return kw
+
+
 def _study(model, cfg, target_fos, support, stages, width) -> Study:
     spec = cfg.stabilisation
     units = parse_units(getattr(cfg, "units", ""))
@@ -162,6 +173,7 @@ def _study(model, cfg, target_fos, support, stages, width) -> Study:
         support=support,
         support_at=tuple(sup.at) if sup is not None and sup.at is not None else None,
         support_angle=sup.angle if sup is not None else 195.0,
+        bolting=_bolting(spec.bolts),
         max_removal=spec.max_removal,
         max_rounds=spec.max_rounds,
         width=width,
