@@ -65,15 +65,21 @@ def _add_forces(f, blocks, xy, force, names) -> None:
     np.add.at(f, (owner, 2), moment)
 
 
+#: two-point Gauss rule on [0, 1]: exact for the force and the moment of a
+#: linearly varying traction on each piece
+_GAUSS_T = 0.5 + np.array([-0.5, 0.5]) / np.sqrt(3.0)
+
+
 def _split_line_loads(blocks: Blocks, loads: Loads):
-    """Cut each line load at the block boundaries: (midpoint, force) pieces."""
+    """Cut each line load at the block boundaries: (point, force) pairs, two
+    per piece at its Gauss points (exact for a trapezoidal traction)."""
     polys = blocks.polygons()
     tree = shapely.STRtree(polys)
     xy, forces, names = [], [], []
     for i, line in enumerate(loads.lines):
         name = line.name or f"line load {i}"
         p0, p1 = np.asarray(line.start, float), np.asarray(line.end, float)
-        q = np.array([line.qx, line.qy], float)
+        q = line.traction(np.array([0.5]))[0]  # the mean: which side it pushes
         length = float(np.hypot(*(p1 - p0)))
         if length <= blocks.tolerance:
             raise InputError(name, "has zero length", "give two different end points")
@@ -88,12 +94,14 @@ def _split_line_loads(blocks: Blocks, loads: Loads):
             raise InputError(
                 name, "does not lie on block boundaries all along", "move it onto the surface"
             )
-        mids = shapely.get_coordinates(
-            shapely.line_interpolate_point(pieces[ok], 0.5, normalized=True)
-        )
-        xy.append(mids - shift)
-        forces.append(np.outer(lengths[ok], q))
-        names += [name] * int(ok.sum())
+        for g in _GAUSS_T:
+            at = shapely.get_coordinates(
+                shapely.line_interpolate_point(pieces[ok], g, normalized=True)
+            )
+            along = (at - shift - p0) @ (p1 - p0) / length**2  # fraction of the load's length
+            xy.append(at - shift)
+            forces.append(0.5 * lengths[ok][:, None] * line.traction(along))
+            names += [name] * int(ok.sum())
     return np.concatenate(xy), np.concatenate(forces), names
 
 

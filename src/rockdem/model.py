@@ -46,14 +46,27 @@ class PointLoad:
 
 @dataclass(frozen=True)
 class LineLoad:
-    """A uniform traction ``(qx, qy)`` (force per unit length) on the block
-    boundary along the segment ``start -> end`` (for example a foundation)."""
+    """A traction ``(qx, qy)`` (force per unit length) on the block boundary
+    along the segment ``start -> end`` (for example a foundation).
+
+    ``q_end``: the traction at ``end`` for a linearly varying load (a
+    trapezoid from ``(qx, qy)`` at ``start``: water on a face, a fill);
+    None: uniform.
+    """
 
     start: tuple[float, float]
     end: tuple[float, float]
     qx: float
     qy: float
     name: str = ""
+    q_end: tuple[float, float] | None = None
+
+    def traction(self, t: np.ndarray) -> np.ndarray:
+        """The traction at fractions ``t`` of the way from start to end, (n, 2)."""
+        q0 = np.array([self.qx, self.qy], dtype=float)
+        q1 = q0 if self.q_end is None else np.asarray(self.q_end, dtype=float)
+        t = np.asarray(t, dtype=float)[:, None]
+        return (1.0 - t) * q0 + t * q1
 
 
 @dataclass(frozen=True)

@@ -329,7 +329,13 @@ def _inputs(model: Model, system, units: str | None) -> str:
         rows.append(
             [
                 f"line load {line.name or k}",
-                f"({_num(line.qx)}, {_num(line.qy)}) per length from "
+                f"({_num(line.qx)}, {_num(line.qy)})"
+                + (
+                    ""
+                    if line.q_end is None
+                    else f" to ({_num(line.q_end[0])}, {_num(line.q_end[1])}) (linear)"
+                )
+                + " per length from "
                 f"({_num(line.start[0])}, {_num(line.start[1])}) to "
                 f"({_num(line.end[0])}, {_num(line.end[1])})",
             ]

@@ -69,7 +69,10 @@ def _loads(cfg: ModelFile, names: dict[str, Loc]):
     for i, ln in enumerate(cfg.loads.lines):
         name = ln.name or _keypath(("loads", "lines", i))
         names[name] = ("loads", "lines", i)
-        lines.append(LineLoad(tuple(ln.start), tuple(ln.end), ln.q[0], ln.q[1], name=name))
+        q_end = None if ln.q_end is None else tuple(ln.q_end)
+        lines.append(
+            LineLoad(tuple(ln.start), tuple(ln.end), ln.q[0], ln.q[1], name=name, q_end=q_end)
+        )
     return Loads(
         gravity=cfg.loads.gravity,
         seismic_h=cfg.loads.seismic_h,

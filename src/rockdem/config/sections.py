@@ -245,14 +245,18 @@ class PointLoadSpec(_Section):
 
 
 class LineLoadSpec(_Section):
-    """A uniform traction along a segment of the block boundaries (a foundation)."""
+    """A traction along a segment of the block boundaries (a foundation, a fill):
+    uniform, or varying linearly from `q` at `start` to `q_end` at `end`."""
 
     start: Point
     """First end of the loaded segment."""
     end: Point
     """Second end of the loaded segment."""
     q: Vector
-    """Traction `[qx, qy]`, force per unit length (y up)."""
+    """Traction `[qx, qy]`, force per unit length (y up); at `start` when `q_end` is
+    given."""
+    q_end: Vector | None = None
+    """Traction at `end` for a linearly varying load (a trapezoid; null: uniform)."""
     name: str = ""
     """Label reported with results."""
 

@@ -98,13 +98,14 @@ def draw_loads(
                 zorder=6,
             )
     for line in model.loads.lines:
-        q = np.array([line.qx, line.qy], dtype=float)
-        mag = float(np.hypot(*q))
-        if mag == 0:
+        t = np.linspace(0.0, 1.0, 5)
+        q = line.traction(t)  # arrows scaled by the local traction (a trapezoid)
+        mag = np.hypot(q[:, 0], q[:, 1])
+        if not mag.max() > 0:
             continue
         p0, p1 = np.asarray(line.start, float), np.asarray(line.end, float)
-        u = q / mag
-        heads = p0 + np.linspace(0.0, 1.0, 5)[:, None] * (p1 - p0)
+        u = q / mag.max()
+        heads = p0 + t[:, None] * (p1 - p0)
         tails = heads - 0.6 * length * u
         ax.plot(tails[:, 0], tails[:, 1], color=c.LOAD_COLOR, lw=1.0, zorder=6, gid="line-load")
         tails_all.append(tails)
@@ -123,7 +124,8 @@ def draw_loads(
             arrows.append(arrow)
         if labels:
             mid = tails.mean(axis=0)
-            text = (line.name + " " if line.name else "") + f"{mag:.3g}/length"
+            size = f"{mag[0]:.3g}" if np.ptp(mag) == 0 else f"{mag[0]:.3g} to {mag[-1]:.3g}"
+            text = (line.name + " " if line.name else "") + f"{size}/length"
             ax.annotate(
                 text,
                 mid,

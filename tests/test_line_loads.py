@@ -1,0 +1,77 @@
+"""Line loads: uniform and linearly varying (trapezoidal) tractions on block boundaries.
+
+Closed form: a traction varying linearly from q0 to q1 over a length L has
+the resultant L (q0 + q1) / 2 acting at L (q0 + 2 q1) / (3 (q0 + q1)) from
+the q0 end (statics of a trapezoid).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import rockdem as rd
+from rockdem.loads import block_loads
+
+B, H = 4.0, 2.0
+
+
+def two_blocks():
+    """Two free blocks side by side on the ground, tops at y = H over 0..B."""
+    ground = [(-5, -1), (9, -1), (9, 0), (-5, 0)]
+    left = [(0, 0), (B / 2, 0), (B / 2, H), (0, H)]
+    right = [(B / 2, 0), (B, 0), (B, H), (B / 2, H)]
+    return rd.Blocks.from_polygons([ground, left, right], fixed=[True, False, False])
+
+
+def trapezoid(q0, q1, a, b):
+    """Resultant and its position of a load q0 at a to q1 at b (1-D)."""
+    L = b - a
+    R = L * (q0 + q1) / 2
+    x = a + L * (q0 + 2 * q1) / (3 * (q0 + q1))
+    return R, x
+
+
+@pytest.mark.parametrize(("q0", "q1"), [(0.0, 30.0), (10.0, 30.0), (30.0, 10.0), (20.0, 20.0)])
+def test_trapezoid_gives_each_block_its_exact_force_and_moment(q0, q1):
+    blocks = two_blocks()
+    load = rd.LineLoad((0.0, H), (B, H), 0.0, -q0, q_end=(0.0, -q1))
+    f = block_loads(blocks, rd.Loads(gravity=False, lines=(load,)))
+    q_mid = q0 + (q1 - q0) / 2  # the traction where the blocks meet
+    for k, (a, b, qa, qb) in enumerate([(0.0, B / 2, q0, q_mid), (B / 2, B, q_mid, q1)], 1):
+        R, x = trapezoid(qa, qb, a, b)
+        cx = blocks.centroid[k, 0]
+        assert f[k, 0] == pytest.approx(0.0, abs=1e-12)
+        assert f[k, 1] == pytest.approx(-R, rel=1e-12)
+        assert f[k, 2] == pytest.approx((x - cx) * -R, rel=1e-9, abs=1e-9)
+
+
+def test_uniform_load_is_the_trapezoid_with_equal_ends():
+    blocks = two_blocks()
+    uniform = rd.LineLoad((0.0, H), (B, H), 3.0, -20.0)
+    same = rd.LineLoad((0.0, H), (B, H), 3.0, -20.0, q_end=(3.0, -20.0))
+    fa = block_loads(blocks, rd.Loads(gravity=False, lines=(uniform,)))
+    fb = block_loads(blocks, rd.Loads(gravity=False, lines=(same,)))
+    np.testing.assert_allclose(fa, fb, rtol=1e-12, atol=1e-12)
+
+
+def test_a_trapezoid_in_a_model_file(tmp_path):
+    from rockdem.config import parse_model
+
+    text = f"""
+joints:
+  rock: {{normal_stiffness: 1.0e+6, friction_angle: 35}}
+blocks:
+  - {{vertices: [[-5, -1], [9, -1], [9, 0], [-5, 0]], fixed: true}}
+  - {{vertices: [[0, 0], [{B}, 0], [{B}, {H}], [0, {H}]], unit_weight: 25}}
+loads:
+  lines:
+    - {{start: [0, {H}], end: [{B}, {H}], q: [0, 0], q_end: [0, -30], name: fill}}
+"""
+    model, _ = parse_model(text)
+    f = block_loads(model.blocks, model.loads)
+    R, x = trapezoid(0.0, 30.0, 0.0, B)
+    W = 25 * B * H
+    assert f[1, 1] == pytest.approx(-W - R, rel=1e-12)
+    assert f[1, 2] == pytest.approx((x - B / 2) * -R, rel=1e-9)
+    assert rd.analyse(model).stable
