@@ -187,11 +187,11 @@ def prepare(model, spec=None, *, max_blocks: int | None = MAX_BLOCKS) -> Plan:
     # the nominal model: every input at its median (a sweep: its first point)
     nominal = sampling.medians(parsed)
     nominal = [round(v) if w else float(v) for v, w in zip(nominal, whole, strict=True)]
+    if cfg.name is None and isinstance(model, str | os.PathLike):
+        data["name"] = Path(model).stem  # as load_model names it
     doc = keypath.apply(data, places, nominal)
     where = f"{source} (study inputs at their medians)"
     ncfg = validate_document(doc, source=where)
-    if cfg.name is None and ncfg.name is None and isinstance(model, str | os.PathLike):
-        data["name"] = Path(model).stem
     nominal_model = build_model(ncfg, source=where, max_blocks=max_blocks)
     key = {
         "model": data,
