@@ -150,21 +150,104 @@ def test_inclined_layers_three_removal_designs(inclined):
 
 
 # ------------------------------------------------------------------ 6.3
-def test_toppling_cannot_be_stabilised_by_removal():
+# The file's Goodman & Bray geometry (its header): 20 columns dx = 0.6 m wide
+# on a base stepped b = dx tan 8 per column, treads dipping 15 degrees,
+# a1 = dx tan 45, a2 = dx tan 15, crest at column 7, gamma = 2.6, phi = 30.
+TOPPLE = {"width": 0.6, "step": 0.6 * np.tan(np.radians(8.0)), "base_dip": 15.0, "unit_weight": 2.6}
+
+
+def _toppling_heights():
+    from rockdem.limit_equilibrium import closed_forms as cf
+
+    return cf.stepped_heights(20, 7, 0.6, 0.6 * np.tan(np.radians(15.0)), TOPPLE["step"])
+
+
+@pytest.fixture(scope="module")
+def toppling_example():
     model, cfg = load("toppling")
-    a = rd.analyse(model)
+    return model, cfg, rd.analyse(model), rd.factor_of_safety(model)
+
+
+def test_toppling_example_is_goodman_and_brays_columns_on_a_stepped_base(toppling_example):
+    """The blocks are the columns the header describes: column n (id n, 1 at
+    the toe) is dx wide and y_n tall, and weighs gamma dx y_n."""
+    model, _, _, _ = toppling_example
+    b = model.blocks
+    y = _toppling_heights()
+    free = b.ids[~b.fixed]
+    assert sorted(free.tolist()) == list(range(1, 21))
+    ids = np.arange(1, 21)
+    assert np.allclose(b.area[b.index_of(ids)], 0.6 * y, rtol=1e-6)
+    # the crest (top of column 7) is 5.06 m above the toe: the paper's 5 m slope
+    assert b.vertices[:, 1].max() == pytest.approx(5.06, abs=0.01)
+
+
+def test_toppling_example_face_columns_topple_as_goodman_and_bray_classify_them(
+    toppling_example,
+):
+    """At the limit the DEM's mechanism is the face columns, block for block
+    in Goodman & Bray's classes at their limiting friction: the toe column
+    slides, the next ones topple, the short columns behind stand; the
+    mechanism stays inside the model (no boundary warning)."""
+    from rockdem.limit_equilibrium import closed_forms as cf
+    from rockdem.modes import boundary_warnings, failure_modes
+
+    _, _, a, fos = toppling_example
+    y = _toppling_heights()
+    F = cf.toppling_fos(y, base_friction=30.0, **TOPPLE)
+    limit = np.degrees(np.arctan(np.tan(np.radians(30.0)) / F))
+    le = cf.toppling(y, base_friction=limit, **TOPPLE)
+    expected = {"slides": le.blocks("sliding"), "topples": le.blocks("toppling")}
+    assert expected["slides"] and len(expected["topples"]) >= 5 and le.blocks("stable")
     assert not a.stable
+    for analysis in (a, fos.failed_analysis):  # staged at phi = 30 and at the limit
+        modes = failure_modes(analysis)
+        got = {m: sorted(int(i) for i in modes.blocks(m)) for m in ("slides", "topples")}
+        assert got == expected
+        assert set(modes.blocks("stable").tolist()) == {0, *le.blocks("stable")}
+        assert boundary_warnings(analysis) == []
+    # the moving columns are at the face: the toe column and those next to it
+    moving = sorted(a.unstable_blocks.tolist())
+    assert moving == list(range(1, len(moving) + 1))
+    # strength reduction rates it (the toe slides at the limit): within 3% of
+    # Goodman & Bray's factor (measured 0.730 against 0.735)
+    assert fos.mode == "strength"
+    assert abs(fos.value - F) / F < 0.03
+
+
+def test_toppling_cannot_be_stabilised_by_removal_but_by_a_toe_support(toppling_example):
+    """Removal would take most of the rock; the support the file names (at the
+    toe, up the base) holds the columns at the target.  Its size is Goodman &
+    Bray's P0 for a force at that point: the larger of what stops column 1
+    sliding (no shear from a support) and toppling about its toe corner, with
+    P1 from the columns above (measured 2.55 t against 2.62 t; the search
+    brackets the force to 2%)."""
+    from rockdem.limit_equilibrium import closed_forms as cf
+    from rockdem.stabilisation import support_force
+
+    model, cfg, a, _ = toppling_example
     b = model.blocks
     share = b.area[b.index_of(a.unstable_blocks)].sum() / b.area[~b.fixed].sum()
-    assert share > 0.3
+    assert share > cfg.stabilisation.max_removal
     kinds = a.interfaces.kind[a.failed_interfaces]
-    assert (kinds == "toppling").sum() > 0.5 * (a.interfaces.kind == "toppling").sum()
-    fos = rd.factor_of_safety(model)
-    # strength can hardly control it: no factor at all, or one that needs the
-    # joints' tan(phi) multiplied by more than 2 (phi = 30 -> over 49 degrees)
-    assert fos.value is None or fos.value < 0.5
-    s = stabilise(model, cfg.stabilisation.target_fos,
-                  max_removal=cfg.stabilisation.max_removal)
+    assert (kinds == "toppling").any() and (kinds == "base").any()
+    target = cfg.stabilisation.target_fos
+    s = stabilise(model, target, max_removal=cfg.stabilisation.max_removal)
     assert not s.reached
     assert "cannot reach" in s.message or "would take" in s.message
     assert "support" in s.needs
+    sup = cfg.stabilisation.support
+    found = support_force(model, target, at=sup.at, angle=sup.angle)
+    assert found.force is not None and found.fos.value >= target - 0.01
+    # Goodman & Bray at phi reduced by the target, the force at the support point
+    y = _toppling_heights()
+    phi = np.degrees(np.arctan(np.tan(np.radians(30.0)) / target))
+    le = cf.toppling(y, base_friction=phi, **TOPPLE)
+    tan_phi, psi, dx = np.tan(np.radians(phi)), np.radians(15.0), 0.6
+    P1, M1, W = le.p_upper[0], le.upper_lever[0], le.weight[0]
+    base_point = np.array(sup.at) @ [np.sin(psi), np.cos(psi)]  # height on column 1's face
+    topple = P1 * (M1 - dx * tan_phi) + W / 2 * (y[0] * np.sin(psi) - dx * np.cos(psi))
+    slide = P1 + W * np.sin(psi) - (W * np.cos(psi) + P1 * tan_phi) * tan_phi
+    need = max(topple / base_point, slide)
+    assert sup.angle == pytest.approx(180.0 - 15.0)  # up the base, as P0
+    assert abs(found.force - need) / need < 0.05

@@ -405,10 +405,37 @@ def test_no_boundary_warning_where_the_mechanism_stays_inside(layers):
     assert not w.stable and boundary_warnings(w) == []
 
 
-def test_toppling_example_warns_that_its_mechanism_is_at_the_back_boundary():
+# The bundled toppling example as it was before its redesign (issue 10): thin
+# columns whose critical mechanism is a set of slivers against the fixed back
+# boundary (FS ~ 0.26), a model the warning must flag.
+SLIVER_TOPPLING_YAML = """\
+name: toppling slivers at the back boundary
+units: t, m, t/m^2
+materials:
+  rock: {unit_weight: 2.6}
+joints:
+  toppling: {normal_stiffness: 1.0e+5, friction_angle: 30}
+  cross: {normal_stiffness: 1.0e+5, friction_angle: 30}
+  ground: {normal_stiffness: 1.0e+5, friction_angle: 30}
+ground_joint: ground
+slope:
+  material: rock
+  profile: {height: 5, face_angle: 80, crest_length: 6, toe_length: 3}
+  depth: 1.5
+  joint_sets:
+    toppling: {dip: 100, spacing: 0.35, origin: [0.1, 0]}
+    cross: {dip: 15, spacing: 1.5, origin: [0, 0.3]}
+analysis:
+  load_steps: 5
+"""
+
+
+def test_slivers_at_the_back_boundary_are_warned_about(tmp_path):
     from rockdem.output import fos_summary
 
-    m = example("toppling")
+    path = tmp_path / "slivers.yaml"
+    path.write_text(SLIVER_TOPPLING_YAML)
+    m = load_model(path)[0]
     fos = rd.factor_of_safety(m, width=0.01)
     doc = fos_summary(fos)
     sides = {c["side"] for c in doc["boundary_contacts"]}
