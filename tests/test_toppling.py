@@ -1,0 +1,189 @@
+"""Toppling on a stepped base: the DEM against Goodman & Bray's limit equilibrium.
+
+Source: R. E. Goodman and J. W. Bray (1976), "Toppling of rock slopes",
+Proc. ASCE Specialty Conference on Rock Engineering for Foundations and
+Slopes, Boulder, vol. 2, 201-234; the worked example of E. Hoek and
+J. W. Bray (1981), Rock Slope Engineering, 3rd ed., ch. 10 (also Wyllie &
+Mah 2004, section 9.4): 16 blocks 10 m wide on treads dipping 30 degrees,
+a1 = 5.0 m, a2 = 5.2 m, step b = 1.0 m, crest at block 10, gamma = 2.5
+t/m^3.  Limiting equilibrium (P0 = 0) at phi = 38.15 degrees on bases and
+faces: blocks 1-3 slide, 4-13 topple, 14-16 stand (tests/test_limit_equilibrium.py
+checks the closed form against these published values).
+
+Here the same blocks are rigid DEM blocks (x up the dip in the base frame,
+the slope facing +x) on a fixed ground block below the stepped base.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import rockdem as rd
+from rockdem.limit_equilibrium.closed_forms import stepped_heights, toppling, toppling_fos
+from rockdem.modes import failure_modes
+
+PHI = 38.15  # the published limiting friction angle
+DX, PSI, STEP, GAMMA = 10.0, 30.0, 1.0, 2.5
+
+
+def staircase(phi: float = PHI, kn: float = 1e6) -> rd.Model:
+    """The 16 blocks of the worked example; ids 1 (toe) to 16, ground 0."""
+    y = stepped_heights(16, 10, 5.0, 5.2, STEP)
+    p = np.radians(PSI)
+    up = np.array([-np.cos(p), np.sin(p)])  # up the dip of the treads
+    normal = np.array([np.sin(p), np.cos(p)])
+
+    def at(s, t):
+        return s * up + t * normal
+
+    blocks = []
+    for k in range(16):  # block k + 1: s in [k dx, (k + 1) dx], base k b above the toe's
+        s0, s1, t0 = k * DX, (k + 1) * DX, k * STEP
+        blocks.append([at(s0, t0), at(s1, t0), at(s1, t0 + y[k]), at(s0, t0 + y[k])])
+    line = [at(-2 * DX, 0.0)]
+    for k in range(16):
+        line += [at(k * DX, k * STEP), at((k + 1) * DX, k * STEP)]
+    line.append(at(18 * DX, 15 * STEP))
+    bottom = min(q[1] for q in line) - 20.0
+    ground = [*line, np.array([line[-1][0], bottom]), np.array([line[0][0], bottom])]
+    return rd.Model(
+        rd.Blocks.from_polygons(
+            [ground, *blocks], fixed=[True] + [False] * 16, unit_weight=GAMMA, ids=range(17)
+        ),
+        rd.Joint(normal_stiffness=kn, friction_angle=phi),
+    )
+
+
+def _le_factor(phi: float = PHI) -> float:
+    y = stepped_heights(16, 10, 5.0, 5.2, STEP)
+    return toppling_fos(y, width=DX, step=STEP, base_dip=PSI, base_friction=phi, unit_weight=GAMMA)
+
+
+def _limit(fos) -> float:
+    return float(np.degrees(np.arctan(np.tan(np.radians(PHI)) / fos)))
+
+
+@pytest.fixture(scope="module")
+def limit():
+    return rd.factor_of_safety(staircase(), width=0.002)
+
+
+def test_dem_limiting_friction_is_goodman_and_brays(limit):
+    """The DEM's limiting friction angle is within 0.75 degrees of Goodman &
+    Bray's 38.15 (FS within 3%; measured 37.6 degrees, FS 1.0206 against
+    1.0006).  The difference is systematic, not the springs' deformability:
+    the bracket is the same for kn = 1e5 and 1e7 (c = 0: the limit does not
+    depend on the stiffness).  It comes from where the LE fixes the forces:
+    each block in one mode (the larger of P_t and P_s), forces at the
+    corners, Q = P tan phi on every face.  The DEM finds one distribution:
+    above the crest its face forces are the LE's P_n (checked to 1%), below
+    it the toppling blocks pass more force down and block 4 slides on its
+    base instead of toppling, so the toe needs less: the DEM is the less
+    conservative by 2%."""
+    F_le = _le_factor()
+    assert abs(F_le - 1.0) < 0.002  # the published limit
+    assert limit.mode == "strength"
+    assert abs(limit.value - F_le) / F_le < 0.03
+    assert abs(_limit(limit.value) - PHI) < 0.75
+    assert limit.value >= F_le  # the direction of the difference explained above
+    for kn in (1e5, 1e7):
+        other = rd.factor_of_safety(staircase(kn=kn), width=0.002)
+        assert other.bracket == pytest.approx(limit.bracket, abs=1e-9)
+    # the forces between blocks 10-13 (above the crest) are Goodman & Bray's
+    a = limit.stable_analysis
+    le = toppling(
+        stepped_heights(16, 10, 5.0, 5.2, STEP),
+        width=DX,
+        step=STEP,
+        base_dip=PSI,
+        base_friction=_limit(a.strength_factor),
+        unit_weight=GAMMA,
+    )
+    faces = a.interfaces
+    for n in range(10, 16):  # the face between blocks n and n + 1 carries P_n
+        k = np.flatnonzero((faces.block_a == n) & (faces.block_b == n + 1))
+        assert len(k) == 1
+        P = le.p_upper[n - 1]
+        assert faces.normal_force[k[0]] == pytest.approx(P, abs=0.01 * le.p_lower.max())
+
+
+def test_dem_limit_state_has_the_classic_pattern(limit):
+    """The last equilibrium before the limit: the toe blocks slide on their
+    whole base, the middle blocks stand on their toe corners with the base
+    open behind and its friction not exhausted, the upper blocks carry no
+    force from their neighbours."""
+    a = limit.stable_analysis
+    faces = a.interfaces
+    base = {
+        int(b): k
+        for k, (g, b) in enumerate(zip(faces.block_a, faces.block_b, strict=True))
+        if g == 0 and faces.length[k] > 5
+    }
+    tan_phi = np.tan(np.radians(_limit(a.strength_factor)))
+    mobilised = {
+        n: abs(faces.shear_force[base[n]]) / (faces.normal_force[base[n]] * tan_phi)
+        for n in range(1, 17)
+    }
+    assert all(faces.current_name[base[n]] == "sliding" for n in (1, 2, 3))
+    assert all(faces.current_name[base[n]] == "open" for n in range(5, 14))
+    assert all(mobilised[n] < 0.95 for n in range(5, 14))
+    for n in (13, 14, 15):
+        k = np.flatnonzero((faces.block_a == n) & (faces.block_b == n + 1))[0]
+        assert faces.normal_force[k] < 1e-6 * GAMMA * DX * 40
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="measured (width 0.002, grow 1.5): 1-4 slides, 5, 6 and 8 slides and topples, "
+    "7 and 13 slides, 9-12 topples, 14-16 stable.  Over six schedules (grow 1.3/1.5/2.0, "
+    "width 0.002-0.01) the unstable set is always 1-13 but the label of blocks 2-13 changes "
+    "from run to run: the relaxation mechanism (a run 2% beyond the bracket, relaxation.py/"
+    "mechanism.py) slips the toe corners by about modes.MOTION_TOL = 5% of the block speed, "
+    "although at the limit the bases of 5-13 carry under 95% of their friction "
+    "(test_dem_limit_state_has_the_classic_pattern)",
+)
+def test_dem_mechanism_is_goodman_and_brays_classes(limit):
+    """Goodman & Bray's classes exactly: 1-3 slide, 4-13 topple, 14-16 stand."""
+    modes = failure_modes(limit.failed_analysis)
+    names = dict(zip(modes.ids.tolist(), modes.name.tolist(), strict=True))
+    assert [n for n in range(1, 17) if names[n] == "slides"] == [1, 2, 3]
+    assert [n for n in range(1, 17) if names[n] == "topples"] == list(range(4, 14))
+    assert [n for n in range(1, 17) if names[n] == "stable"] == [14, 15, 16]
+
+
+SCHEDULES = [(1.3, 0.005), (1.5, 0.005), (2.0, 0.01)]
+
+
+def test_staircase_mechanism_is_the_same_for_any_schedule():
+    """Issue 10: the moving blocks of the limit do not depend on the trial
+    schedule (blocks 1-13 for grow 1.3, 1.5 and 2.0; the brackets differ
+    slightly, 1.0137-1.0156, the continuation losing equilibrium where its
+    path takes it)."""
+    system = rd.build_system(staircase())
+    sets = []
+    for grow, width in SCHEDULES:
+        fos = rd.factor_of_safety(system, grow=grow, width=width)
+        sets.append(frozenset(fos.failed_analysis.unstable_blocks.tolist()))
+    assert len(set(sets)) == 1, sets
+    assert sets[0] == frozenset(range(1, 14))
+
+
+def test_toppling_example_mechanism_is_the_same_for_any_schedule():
+    """The bundled toppling example (Goodman & Bray columns at the paper's
+    scale): the same moving blocks, the same mode per block and brackets that
+    overlap, whatever the growth of the trial factor."""
+    from rockdem.config import load_model
+    from rockdem.examples import example_path
+
+    system = rd.build_system(load_model(example_path("toppling"))[0])
+    sets, codes, brackets = [], [], []
+    for grow, width in SCHEDULES:
+        fos = rd.factor_of_safety(system, grow=grow, width=width)
+        failed = fos.failed_analysis
+        sets.append(frozenset(failed.unstable_blocks.tolist()))
+        codes.append(tuple(failure_modes(failed).code.tolist()))
+        brackets.append(fos.bracket)
+    assert len(set(sets)) == 1 and len(sets[0]) >= 10
+    assert len(set(codes)) == 1
+    assert max(b[0] for b in brackets) <= min(b[1] for b in brackets)
