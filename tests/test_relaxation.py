@@ -36,6 +36,20 @@ def test_block_on_a_plane_settles_below_and_slides_above_the_planar_limit(dip, p
     assert np.degrees(np.arctan2(-uy, ux)) == pytest.approx(dip, abs=1.0)
 
 
+def test_a_mechanism_is_known_by_its_acceleration_alone(monkeypatch):
+    """On large models a run's motion stays below the elastic response although
+    the blocks keep accelerating: that alone marks the mechanism.  Block on a
+    plane (Hoek & Bray 1981): 1.02 FS accelerates, 0.98 FS settles."""
+    import rockdem.relaxation as R
+
+    monkeypatch.setattr(R, "MECHANISM_MOTION", np.inf)  # only the acceleration counts
+    dip, phi = 25, 35
+    fs = V.sliding_fos(dip, phi)
+    model = V.block_on_plane(dip, rd.Joint(normal_stiffness=1e6, friction_angle=phi))
+    assert _run(model, 1.02 * fs, max_steps=800)[1].status == "mechanism"
+    assert _run(model, 0.98 * fs, max_steps=800)[1].status == "equilibrium"
+
+
 def test_wedge_settles_below_and_fails_above_the_paper_closed_form():
     """Two-block wedge, the seed paper's Eq. 7 (V.wedge_fos): 0.95 and 1.05 of it."""
     exact = V.wedge_fos(200, 75, 37, 27, 35, 30, 35)

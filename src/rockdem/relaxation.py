@@ -17,15 +17,18 @@ explicit dynamics of the blocks, the scheme of UDEC and PFC (Cundall 1987):
 The run ends in one of three ways.  ``equilibrium``: the unbalanced force
 fell below ``tolerance`` of the loads (the caller polishes with Newton).
 ``mechanism``: the budget ran out with blocks still moving: over the
-last quarter of the run some block moved more than its elastic response
-while the unbalanced force stayed well above the tolerance (UDEC's
-"unbalanced force does not go to zero, velocities do not stop").
+last quarter of the run some block moved more than its elastic response,
+or the blocks kept accelerating (the motion of each of the last four
+eighths of the run no less than that of the one before), while the
+unbalanced force stayed well above the tolerance (UDEC's "unbalanced force
+does not go to zero, velocities do not stop").
 ``undecided``: neither.  A confirmation by an independent method, not a
 proof; the proof is the LP of :mod:`rockdem.certificate`.
 """
 
 from __future__ import annotations
 
+import itertools
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -49,6 +52,15 @@ CONFIRM_MARGINS = (0.02, 0.05)
 MECHANISM_MOTION = 1.0
 #: ... while the unbalanced force never fell below this multiple of the tolerance
 STEADY_FORCE = 30.0
+#: or: the motion over each of the last ACCELERATING windows (an eighth of the
+#: run each) did not fall below NOT_SLOWING x the one before (the blocks keep
+#: accelerating: on large models the elastic response is large and the motion
+#: of a 4,000-step run is a small part of it although the mechanism is clear)
+WINDOWS = 8
+ACCELERATING = 4
+NOT_SLOWING = 0.9
+#: ... and the last window moved some block at least this share of its elastic response
+WINDOW_MOTION = 1e-3
 
 
 @dataclass(frozen=True)
@@ -105,6 +117,8 @@ def relax(
     r = unbalanced(q)
     ratio = norm(r * scale) / f_norm
     late_start, late_low = None, np.inf
+    window = max(max_steps // WINDOWS, 1)
+    marks = [q.copy()]  # displacements at the end of each window
     step = 0
     for step in range(1, max_steps + 1):
         v += (r - DAMPING * np.abs(r) * np.sign(v)) / mass
@@ -119,10 +133,20 @@ def relax(
             late_start = q.copy()
         if late_start is not None:
             late_low = min(late_low, ratio)
+        if step % window == 0:
+            marks = [*marks[-ACCELERATING:], q.copy()]
     motion = 0.0
     if late_start is not None:
         motion = float(np.max(np.abs((q - late_start) / scale))) / elastic
-    moving = motion > MECHANISM_MOTION and late_low > STEADY_FORCE * tolerance
+    moves = [
+        float(np.max(np.abs((b - a) / scale))) / elastic for a, b in itertools.pairwise(marks)
+    ]
+    accelerating = (
+        len(moves) >= ACCELERATING
+        and moves[-1] > WINDOW_MOTION
+        and all(m1 >= NOT_SLOWING * m0 for m0, m1 in itertools.pairwise(moves))
+    )
+    moving = (motion > MECHANISM_MOTION or accelerating) and late_low > STEADY_FORCE * tolerance
     status = "mechanism" if moving else "undecided"
     late = None if late_start is None else q - late_start
     return Relaxation(status, q, step, float(ratio), motion, late)
