@@ -60,8 +60,8 @@ def __dir__() -> list[str]:
 __all__ = [
     "Analysis",
     "Blocks",
-    "FactorOfSafety",
     "Bolt",
+    "FactorOfSafety",
     "InputError",
     "Joint",
     "LineLoad",

@@ -13,9 +13,9 @@ from pydantic_core import PydanticCustomError
 from .geometry import GeometrySpec
 from .sections import (
     BlockSpec,
+    BoltSpec,
     JointLineSpec,
     JointSpec,
-    BoltSpec,
     LoadsSpec,
     MaterialSpec,
     RemoveSpec,
