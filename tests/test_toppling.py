@@ -187,3 +187,53 @@ def test_toppling_example_mechanism_is_the_same_for_any_schedule():
     assert len(set(sets)) == 1 and len(sets[0]) >= 10
     assert len(set(codes)) == 1
     assert max(b[0] for b in brackets) <= min(b[1] for b in brackets)
+
+
+def columns(face: float, phi: float = 30.0) -> tuple[rd.Model, np.ndarray]:
+    """The bundled example's toppling columns (20 columns 0.6 m wide, treads
+    dipping 15 degrees, overall base 23, crest at column 7) with another face
+    angle, built from Goodman & Bray's a1, a2, b; ids 1 (toe) to 20."""
+    dx, psi, n = 0.6, 15.0, 20
+    a1 = dx * np.tan(np.radians(face - psi))
+    a2 = dx * np.tan(np.radians(psi))
+    b = dx * np.tan(np.radians(23.0 - psi))
+    y = stepped_heights(n, 7, a1, a2, b)
+    p = np.radians(psi)
+    up, normal = np.array([-np.cos(p), np.sin(p)]), np.array([np.sin(p), np.cos(p)])
+
+    def at(s, t):
+        return s * up + t * normal
+
+    blocks = [
+        [at(k * dx, k * b), at((k + 1) * dx, k * b), at((k + 1) * dx, k * b + y[k]),
+         at(k * dx, k * b + y[k])]
+        for k in range(n)
+    ]  # fmt: skip
+    line = [at(-2 * dx, 0.0)]
+    for k in range(n):
+        line += [at(k * dx, k * b), at((k + 1) * dx, k * b)]
+    line.append(at((n + 2) * dx, (n - 1) * b))
+    bottom = min(q[1] for q in line) - 2 * dx
+    ground = [*line, np.array([line[-1][0], bottom]), np.array([line[0][0], bottom])]
+    model = rd.Model(
+        rd.Blocks.from_polygons(
+            [ground, *blocks], fixed=[True] + [False] * n, unit_weight=2.6, ids=range(n + 1)
+        ),
+        rd.Joint(normal_stiffness=1e5, friction_angle=phi),
+    )
+    le = toppling_fos(y, width=dx, step=b, base_dip=psi, base_friction=phi, unit_weight=2.6)
+    return model, le
+
+
+@pytest.mark.parametrize("grow", [1.5, 2.0])
+def test_the_search_does_not_stop_at_a_newton_stall(grow):
+    """With a 68-degree face Newton's method stalls at F = 0.449 although the
+    columns are in equilibrium up to Goodman & Bray's 0.521: dynamic
+    relaxation, continued while its unbalanced force keeps falling, finds
+    the equilibria and the search goes on (it had reported 0.449, with a
+    'confirmed' mechanism after 4,000 relaxation steps that were still
+    settling)."""
+    model, le = columns(68.0)
+    fos = rd.factor_of_safety(model, grow=grow)
+    assert fos.value == pytest.approx(le, rel=0.02)
+    assert fos.failed_analysis.evidence.proof in {"lp-certificate", "dynamic-relaxation"}

@@ -20,9 +20,10 @@ from .certificate import certificate_for, prove_failed_trial, prove_in_region, w
 from .linalg import norm
 from .mechanism import held_blocks, newton_mechanism, relaxation_mechanism, slip_surface
 from .model import Model
+from .relaxation import TOLERANCE as RELAXATION_TOLERANCE
 from .relaxation import confirm_failed_analysis, confirm_failed_trial
 from .results import Analysis, Evidence, FactorOfSafety, Step, Trial, tabulate
-from .solver import Solve, System, build_system, residual, solve_equilibrium
+from .solver import RELAXED, Solve, System, build_system, residual, solve_equilibrium
 from .spring_law import SpringState, commit
 
 log = logging.getLogger(__name__)
@@ -31,6 +32,9 @@ log = logging.getLogger(__name__)
 MAX_CASCADE = 100
 #: a failed load step is retried in up to this many equal sub-steps (halving)
 MAX_SUBSTEPS = 8
+#: times a factor-of-safety search goes on past a limit that dynamic
+#: relaxation showed to be a stall of Newton's method (equilibrium beyond it)
+RESTARTS = 3
 
 
 def _settle(
@@ -65,8 +69,10 @@ def _settle(
             new_state = new_state.without_slip()
         resp, r = residual(system, sol.q, new_state, load_factor, factor)
         state = new_state
-        if f_norm == 0 or norm(r * scale) <= tol * f_norm:
-            sol = Solve(True, sol.q, resp, iterations, history, "converged", sol.direction)
+        # an equilibrium of the dynamic relaxation holds to that method's tolerance
+        held = max(tol, RELAXATION_TOLERANCE) if sol.reason == RELAXED else tol
+        if f_norm == 0 or norm(r * scale) <= held * f_norm:
+            sol = Solve(True, sol.q, resp, iterations, history, sol.reason, sol.direction)
             break
         sol = solve_equilibrium(
             system,
@@ -364,39 +370,52 @@ def factor_of_safety(
         # a staged analysis that stalled without proof bounds nothing: the
         # continuation from the stable state decides (and may pass it)
         hi_an, hi_F = None, np.inf
-    while hi_F - lo_an.strength_factor > width:
-        if hi_an is None:
-            F = lo_an.strength_factor * grow
-            if F > largest:
-                return FactorOfSafety(
-                    None,
-                    (lo_an.strength_factor, np.inf),
-                    "no-failure",
-                    tuple(trials),
-                    lo_an,
-                    None,
-                    _DEFINITION,
-                )
-        else:
-            F = 0.5 * (lo_an.strength_factor + hi_F)
-        stage += 1
-        a, sol = _continue(system, lo_an, F, stage, resolution=width / 4)
-        record(F, a)
-        if a.stable:
-            lo_an = a
-            continue
-        hi_an, hi_F = a, min(F, sol.failed_at or F)
-        if sol.reached is not None and sol.reached > lo_an.strength_factor:
+    restarts = 0
+    while True:
+        while hi_F - lo_an.strength_factor > width:
+            if hi_an is None:
+                F = lo_an.strength_factor * grow
+                if F > largest:
+                    return FactorOfSafety(
+                        None,
+                        (lo_an.strength_factor, np.inf),
+                        "no-failure",
+                        tuple(trials),
+                        lo_an,
+                        None,
+                        _DEFINITION,
+                    )
+            else:
+                F = 0.5 * (lo_an.strength_factor + hi_F)
             stage += 1
-            b, _ = _continue(system, lo_an, sol.reached, stage, q0=sol.reached_q)
-            record(sol.reached, b)
-            if b.stable:
-                lo_an = b
-    lo, hi = lo_an.strength_factor, hi_F
-    if hi_an is not None and hi_an.evidence.certified is None:
+            a, sol = _continue(system, lo_an, F, stage, resolution=width / 4)
+            record(F, a)
+            if a.stable:
+                lo_an = a
+                continue
+            hi_an, hi_F = a, min(F, sol.failed_at or F)
+            if sol.reached is not None and sol.reached > lo_an.strength_factor:
+                stage += 1
+                b, _ = _continue(system, lo_an, sol.reached, stage, q0=sol.reached_q)
+                record(sol.reached, b)
+                if b.stable:
+                    lo_an = b
+        lo, hi = lo_an.strength_factor, hi_F
+        if hi_an is None or hi_an.evidence.certified is not None:
+            break
         hi_an, trials = prove_failed_trial(system, hi_an, lo_an.state, hi, trials)
-        hi_an, trials, run = confirm_failed_trial(system, hi_an, lo_an, hi, trials)
+        hi_an, trials, run, beyond = confirm_failed_trial(system, hi_an, lo_an, hi, trials)
+        if run.status == "equilibrium" and not hi_an.evidence.certified and restarts < RESTARTS:
+            # equilibrium beyond the limit: Newton had stalled; search on from there
+            restarts += 1
+            stage += 1
+            b, _ = _continue(system, lo_an, beyond, stage, q0=run.q, base_factor=beyond)
+            record(beyond, b)
+            if b.stable:
+                lo_an, hi_an, hi_F = b, None, np.inf
+                continue
         hi_an = relaxation_mechanism(system, hi_an, run)
+        break
     return FactorOfSafety(
         0.5 * (lo + hi), (lo, hi), "strength", tuple(trials), lo_an, hi_an, _DEFINITION
     )
@@ -410,8 +429,19 @@ _DEFINITION = (
 )
 
 
-def _continue(system: System, base: Analysis, factor: float, stage: int, q0=None, resolution=None):
-    """One strength trial from the converged state of ``base``: (Analysis, Solve)."""
+def _continue(
+    system: System,
+    base: Analysis,
+    factor: float,
+    stage: int,
+    q0=None,
+    resolution=None,
+    base_factor: float | None = None,
+):
+    """One strength trial from the converged state of ``base``: (Analysis, Solve).
+
+    ``q0`` (default: the displacements of ``base``) is in equilibrium at
+    ``base_factor`` (default: ``base``'s factor)."""
     asm = system.assembly
     free = ~system.blocks.fixed
     q_base = np.zeros(asm.n_dof)
@@ -419,9 +449,8 @@ def _continue(system: System, base: Analysis, factor: float, stage: int, q0=None
     q0 = q_base if q0 is None else q0
     lam = base.load_factor
     start = base.state.without_slip()
-    sol, state = _settle(
-        system, start, q0, lam, factor, stage, base.strength_factor, True, resolution
-    )
+    at = base.strength_factor if base_factor is None else base_factor
+    sol, state = _settle(system, start, q0, lam, factor, stage, at, True, resolution)
     ev = _evidence(sol)
     n_failed = int((state.yielded | state.broken).sum())
     step = Step(stage, lam, factor, sol.converged, ev, n_failed)

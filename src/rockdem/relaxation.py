@@ -61,6 +61,17 @@ ACCELERATING = 4
 NOT_SLOWING = 0.9
 #: ... and the last window moved some block at least this share of its elastic response
 WINDOW_MOTION = 1e-3
+#: never a mechanism while the unbalanced force is still falling: its peak
+#: over the last quarter of the run is below DECAYING x its peak over the
+#: second quarter (it oscillates step to step; the blocks are finding
+#: equilibrium, slowly: measured on toppling columns, x0.3 per 1,000 steps
+#: down to equilibrium beyond a false Newton limit, flat where none exists)
+DECAYING = 0.5
+#: an extended run that is still settling at the end of a segment goes on,
+#: up to this many segments in all, and at most about EXTEND_WORK dof-steps
+#: (60 dof: 20 segments; 3,000 dof: 8; 30,000 dof: 1)
+EXTENSIONS = 20
+EXTEND_WORK = 1e8
 
 
 @dataclass(frozen=True)
@@ -74,6 +85,8 @@ class Relaxation:
     motion: float  # largest scaled displacement over the last quarter, / elastic
     #: displacements over the last quarter of the run (the late motion), if it ran that far
     late: np.ndarray | None = None
+    #: the unbalanced force was still falling at the end (see DECAYING)
+    settling: bool = False
 
     def __str__(self) -> str:
         return (
@@ -91,8 +104,17 @@ def relax(
     *,
     max_steps: int = MAX_STEPS,
     tolerance: float = TOLERANCE,
+    extend: bool = False,
 ) -> Relaxation:
-    """Damped explicit dynamics from ``q0`` at the given load and strength factors."""
+    """Damped explicit dynamics from ``q0`` at the given load and strength factors.
+
+    The run is judged after ``max_steps`` steps (a segment).  ``extend=True``:
+    a segment that ends undecided while the unbalanced force is still falling
+    (see DECAYING) is followed by
+    another, up to :func:`step_budget` steps in all, until equilibrium or it
+    stops settling: toppling columns can need tens of thousands of steps to
+    find an equilibrium that exists.
+    """
     asm = system.assembly
     scale = asm.dof_scale
     f = load_factor * system.f_ext
@@ -113,14 +135,16 @@ def relax(
 
     mass = np.asarray(abs(system.K0).sum(axis=1)).ravel()
     elastic = system.elastic_scale * max(load_factor, 1e-12)
+    budget = step_budget(asm.n_dof, max_steps) if extend else max_steps
     v = np.zeros_like(q)
     r = unbalanced(q)
     ratio = norm(r * scale) / f_norm
-    late_start, late_low = None, np.inf
     window = max(max_steps // WINDOWS, 1)
+    seg_start, late_start, late_low = 0, None, np.inf
     marks = [q.copy()]  # displacements at the end of each window
+    peaks = [0.0]  # the largest ratio in each window of the segment (it oscillates)
     step = 0
-    for step in range(1, max_steps + 1):
+    for step in range(1, budget + 1):
         v += (r - DAMPING * np.abs(r) * np.sign(v)) / mass
         q += v
         r = unbalanced(q)
@@ -129,27 +153,49 @@ def relax(
             break
         if ratio <= tolerance:
             return Relaxation("equilibrium", q, step, float(ratio), 0.0)
-        if step == (3 * max_steps) // 4:
+        into = step - seg_start
+        if into == (3 * max_steps) // 4:
             late_start = q.copy()
         if late_start is not None:
             late_low = min(late_low, ratio)
+        peaks[-1] = max(peaks[-1], ratio)
         if step % window == 0:
             marks = [*marks[-ACCELERATING:], q.copy()]
-    motion = 0.0
-    if late_start is not None:
-        motion = float(np.max(np.abs((q - late_start) / scale))) / elastic
-    moves = [
-        float(np.max(np.abs((b - a) / scale))) / elastic for a, b in itertools.pairwise(marks)
-    ]
-    accelerating = (
-        len(moves) >= ACCELERATING
-        and moves[-1] > WINDOW_MOTION
-        and all(m1 >= NOT_SLOWING * m0 for m0, m1 in itertools.pairwise(moves))
-    )
-    moving = (motion > MECHANISM_MOTION or accelerating) and late_low > STEADY_FORCE * tolerance
-    status = "mechanism" if moving else "undecided"
-    late = None if late_start is None else q - late_start
-    return Relaxation(status, q, step, float(ratio), motion, late)
+            peaks.append(0.0)
+        if into < max_steps:
+            continue
+        # the end of a segment: judge it
+        motion = 0.0
+        if late_start is not None:
+            motion = float(np.max(np.abs((q - late_start) / scale))) / elastic
+        moves = [
+            float(np.max(np.abs((b - a) / scale))) / elastic for a, b in itertools.pairwise(marks)
+        ]
+        accelerating = (
+            len(moves) >= ACCELERATING
+            and moves[-1] > WINDOW_MOTION
+            and all(m1 >= NOT_SLOWING * m0 for m0, m1 in itertools.pairwise(moves))
+        )
+        quarter = max(WINDOWS // 4, 1)
+        done = peaks[:-1]  # whole windows of this segment
+        last, before = max(done[-quarter:]), max(done[quarter : 2 * quarter] or [np.inf])
+        settling = bool(last <= DECAYING * before)
+        moving = (motion > MECHANISM_MOTION or accelerating) and late_low > STEADY_FORCE * tolerance
+        late = None if late_start is None else q - late_start
+        if moving and not settling:
+            return Relaxation("mechanism", q, step, float(ratio), motion, late)
+        if not (settling and step + max_steps <= budget):
+            return Relaxation("undecided", q, step, float(ratio), motion, late, settling)
+        # settling: one more segment
+        seg_start, late_start, late_low, peaks = step, None, np.inf, [0.0]
+    return Relaxation("undecided", q, step, float(ratio), 0.0)
+
+
+def step_budget(n_dof: int, max_steps: int = MAX_STEPS) -> int:
+    """Steps an extended run may take in all: EXTENSIONS segments on small
+    models, fewer as the work per step grows (EXTEND_WORK dof-steps), never
+    less than one segment."""
+    return int(np.clip(EXTEND_WORK / max(n_dof, 1), max_steps, EXTENSIONS * max_steps))
 
 
 def confirm_failed_analysis(system, failed, state, q, load_factor: float):
@@ -157,7 +203,7 @@ def confirm_failed_analysis(system, failed, state, q, load_factor: float):
     failed to carry, from its last equilibrium (``state``, ``q``): the
     statement goes into its evidence.  Returns ``(analysis, run)``; the
     run's late motion is the mechanism (also where the LP proved failure)."""
-    run = relax(system, state, load_factor, failed.strength_factor, q)
+    run = relax(system, state, load_factor, failed.strength_factor, q, extend=True)
     return _with_relaxation(failed, f"{run} at load factor {load_factor:.4g}"), run
 
 
@@ -167,22 +213,23 @@ def confirm_failed_trial(system, failed, base, factor: float, trials):
     ``base``: a mechanism there is stated in the failed trial's evidence
     (proof ``"dynamic-relaxation"`` unless the LP proved it).  Right at the
     limit the excess force is too small for the blocks to move visibly.
-    Returns ``(analysis, trials, run)``."""
+    Returns ``(analysis, trials, run, factor of the run)``; a run that found
+    equilibrium there shows that the limit was a stall of Newton's method."""
     asm = system.assembly
     free = ~system.blocks.fixed
     q0 = np.zeros(asm.n_dof)
     q0[asm.dof[free].ravel()] = base.displacement[free].ravel()
     for margin in CONFIRM_MARGINS:
         beyond = factor * (1.0 + margin)
-        run = relax(system, base.state.without_slip(), base.load_factor, beyond, q0)
-        if run.status == "mechanism":
+        run = relax(system, base.state.without_slip(), base.load_factor, beyond, q0, extend=True)
+        if run.status != "undecided":  # a mechanism, or equilibrium: the limit was a stall
             break
     text = f"{run} at F = {beyond:.6g} ({margin:.0%} beyond the bracket)"
     failed = _with_relaxation(failed, text)
     trials = list(trials)
     last_failed = max(i for i, t in enumerate(trials) if not t.stable)
     trials[last_failed] = replace(trials[last_failed], evidence=failed.evidence)
-    return failed, trials, run
+    return failed, trials, run, beyond
 
 
 def _with_relaxation(failed, text: str):

@@ -60,9 +60,9 @@ HOMOTOPY_ITERATIONS = 25
 RELEASE_LAST = 1e-3
 #: smallest relative step of the homotopy before equilibrium is declared lost
 HOMOTOPY_MIN_STEP = 1e-4
-#: dynamic relaxation steps spent checking that a Newton failure at the limit
-#: is not a stall (it starts within the resolution of the limit)
-STALL_CHECK_STEPS = 1_000
+#: the reason of an equilibrium found by dynamic relaxation that Newton could
+#: not polish (out-of-balance force within rockdem.relaxation.TOLERANCE)
+RELAXED = "converged by dynamic relaxation"
 
 
 @dataclass(frozen=True, eq=False, repr=False)
@@ -404,16 +404,19 @@ def _strength_homotopy(system, state, lam, target, F_ok, q_ok, bad, smallest, ma
         if bad is not None and abs(bad[0] - F_ok) < smallest:
             if bad[1] <= smallest * (1 + 1e-9):  # Newton failed from close by
                 # ... a second, independent method looks for equilibrium there
-                dr = relax(system, state, lam, bad[0], q_ok, max_steps=STALL_CHECK_STEPS)
-                if dr.status == "equilibrium":
+                # (a segment, continued while its unbalanced force keeps falling)
+                dr = relax(system, state, lam, bad[0], q_ok, extend=True)
+                if dr.status == "equilibrium":  # a stall, not the limit: go on from there
                     polish = _newton(system, state, lam, bad[0], dr.q, HOMOTOPY_ITERATIONS)
                     total += polish.iterations
-                    if polish.converged:  # a stall, not the limit: go on from there
-                        if bad[0] == target:
-                            return replace(polish, iterations=total, residuals=history)
-                        F_ok, q_ok, step = bad[0], polish.q, bad[1]
-                        bad = None
-                        continue
+                    if not polish.converged:  # relaxation's equilibrium, to its tolerance
+                        resp_dr, _ = residual(system, dr.q, state, lam, bad[0])
+                        polish = Solve(True, dr.q, resp_dr, 0, [], RELAXED, np.zeros_like(dr.q))
+                    if bad[0] == target:
+                        return replace(polish, iterations=total, residuals=history)
+                    F_ok, q_ok, step = bad[0], polish.q, bad[1]
+                    bad = None
+                    continue
                 reason = f"no equilibrium beyond strength factor {F_ok:.6g} ({last.reason})"
                 return Solve(
                     False,
