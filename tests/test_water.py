@@ -182,3 +182,17 @@ def test_water_above_a_free_face_is_refused():
 
     with pytest.raises(rd.InputError, match=r"above the free surface of block 2"):
         rd.build_system(replace(model, loads=high))
+
+
+def test_bundled_plane_failure_example_matches_hoek_and_bray():
+    """examples/plane-failure-water.yaml (this section mirrored to face +x, the
+    crack full): FS = Hoek & Bray's formula within 0.5%, proven by the LP."""
+    from rockdem.config import load_model
+    from rockdem.examples import example_path
+
+    model, _ = load_model(example_path("plane-failure-water"))
+    weight = float(model.blocks.weight[~model.blocks.fixed][0])
+    fos = rd.factor_of_safety(model, width=0.002)
+    assert fos.value == pytest.approx(_hoek_bray(FULL, weight), rel=0.005)
+    assert fos.failed_analysis.evidence.proof == "lp-certificate"
+    assert rd.analyse(model).stable
