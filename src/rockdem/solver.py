@@ -60,6 +60,9 @@ HOMOTOPY_ITERATIONS = 25
 RELEASE_LAST = 1e-3
 #: smallest relative step of the homotopy before equilibrium is declared lost
 HOMOTOPY_MIN_STEP = 1e-4
+#: a check for a stall at the limit relaxes in segments of at most about
+#: this many dof-steps (4,000 steps up to 10,000 dof, 1,000 from 40,000)
+STALL_CHECK_WORK = 4e7
 #: the reason of an equilibrium found by dynamic relaxation that Newton could
 #: not polish (out-of-balance force within rockdem.relaxation.TOLERANCE)
 RELAXED = "converged by dynamic relaxation"
@@ -405,7 +408,8 @@ def _strength_homotopy(system, state, lam, target, F_ok, q_ok, bad, smallest, ma
             if bad[1] <= smallest * (1 + 1e-9):  # Newton failed from close by
                 # ... a second, independent method looks for equilibrium there
                 # (a segment, continued while its unbalanced force keeps falling)
-                dr = relax(system, state, lam, bad[0], q_ok, extend=True)
+                segment = int(np.clip(STALL_CHECK_WORK / system.assembly.n_dof, 1_000, 4_000))
+                dr = relax(system, state, lam, bad[0], q_ok, max_steps=segment, extend=True)
                 if dr.status == "equilibrium":  # a stall, not the limit: go on from there
                     polish = _newton(system, state, lam, bad[0], dr.q, HOMOTOPY_ITERATIONS)
                     total += polish.iterations
