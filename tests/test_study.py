@@ -533,3 +533,27 @@ def test_the_command_line_does_not_load_dask_or_pandas():
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "[]"
+
+
+def test_bolt_utilisation_per_sample():
+    """A bolted block pushed sideways (kh 0.5), friction swept: the largest bolt
+    utilisation of each sample's last equilibrium is in the table, and it falls
+    as the joint gets stronger (the bolt carries less)."""
+    doc = yaml.safe_load(
+        """
+units: kN, m, kPa
+joints:
+  rock: {normal_stiffness: 1.0e+6, friction_angle: 30}
+blocks:
+  - {vertices: [[-5, -1], [5, -1], [5, 0], [-5, 0]], fixed: true}
+  - {vertices: [[0, 0], [1, 0], [1, 1], [0, 1]], unit_weight: 25}
+loads: {seismic_h: 0.5}
+bolts:
+  - {head: [0.8, 1.0], angle: 240, length: 2.5, capacity: 50, axial_stiffness: 1.0e+4}
+"""
+    )
+    spec = {"sweep": {"joints.rock.friction_angle": {"values": [20, 25, 30]}}, "compute": "verdict"}
+    table, _ = rockdem.study(doc, spec, workers=0)
+    use = table.sort_values("joints.rock.friction_angle")["bolt_utilisation"].to_numpy(float)
+    assert np.all((use > 0) & (use <= 1)), use
+    assert np.all(np.diff(use) < 0), use

@@ -40,7 +40,8 @@ class StudyResult(NamedTuple):
 
     table: Any
     """pandas DataFrame, one row per sample (sorted): the inputs, fs, fs_low, fs_high,
-    mode, proof, failed, unstable_blocks, unstable_area, error, seconds, worker."""
+    mode, proof, failed, unstable_blocks, unstable_area, bolt_utilisation, error,
+    seconds, worker."""
     summary: dict
     """Probability of failure and its interval, FS statistics, reliability indices,
     sensitivity, worst samples (see :func:`rockdem.studies.stats.summarise`), and
@@ -257,11 +258,13 @@ def evaluate(
             else:
                 row["failed"] = f.mode == "strength-independent"
             state = f.failed_analysis
+            row["bolt_utilisation"] = _bolt_use(f.stable_analysis)
         else:
             from ..analysis import analyse
 
             state = analyse(model)
             row.update(mode="verdict", failed=not state.stable)
+            row["bolt_utilisation"] = _bolt_use(state)
             row["proof"] = None if state.stable else state.evidence.proof
         if state is not None:
             moving = np.asarray(state.unstable, dtype=bool)
@@ -274,6 +277,12 @@ def evaluate(
     row["seconds"] = time.perf_counter() - t0
     row["worker"] = f"{socket.gethostname()}:{os.getpid()}"
     return row
+
+
+def _bolt_use(analysis) -> float:
+    """The largest bolt utilisation of an analysis (NaN without bolts or analysis)."""
+    bolts = None if analysis is None else analysis.bolts
+    return float(bolts.utilisation.max()) if bolts is not None and bolts.n else float("nan")
 
 
 def _error_row(plan: Plan, sample: int, error: str) -> dict:

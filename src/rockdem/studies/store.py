@@ -34,6 +34,7 @@ OUTPUTS: dict[str, str] = {
     "failed": "bool",  # FS < 1 (compute: verdict: unstable at F = 1)
     "unstable_blocks": "int",  # blocks moving in the mechanism at the limit
     "unstable_area": "float",  # their area
+    "bolt_utilisation": "float",  # largest bolt force / capacity at the last equilibrium
     "error": "str",  # why the sample has no result
     "seconds": "float",  # wall time of the sample
     "worker": "str",  # host:pid that ran it
