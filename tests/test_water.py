@@ -196,3 +196,20 @@ def test_bundled_plane_failure_example_matches_hoek_and_bray():
     assert fos.value == pytest.approx(_hoek_bray(FULL, weight), rel=0.005)
     assert fos.failed_analysis.evidence.proof == "lp-certificate"
     assert rd.analyse(model).stable
+
+
+def test_model_picture_draws_the_pressure_on_every_wet_joint():
+    """The plane and the crack of the bundled plane failure carry water: one
+    pressure diagram each, as deep as the pressure (largest at the crack's foot)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from rockdem import plots
+    from rockdem.config import load_model
+    from rockdem.examples import example_path
+
+    model, _ = load_model(example_path("plane-failure-water"))
+    ax = plots.plot_model(model)
+    (diagrams,) = [c for c in ax.collections if c.get_gid() == "water-pressure"]
+    assert len(diagrams.get_paths()) == 2
+    assert "1 block," in ax.get_title()

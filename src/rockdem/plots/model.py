@@ -159,6 +159,39 @@ def draw_water_table(ax: Axes, table, blocks) -> None:
     )
 
 
+def draw_pressure_diagrams(ax: Axes, system, samples: int = 9) -> None:
+    """The joint water pressure along every interface below the table, drawn
+    as a diagram on the joint (filled, offset along its normal; the largest
+    pressure is 4% of the model's size)."""
+    from ..loads import pore_pressure
+
+    faces, loads = system.interfaces, system.model.loads
+    t = np.linspace(0.0, 1.0, samples)
+    pts = faces.start[:, None, :] + t[None, :, None] * (faces.end - faces.start)[:, None, :]
+    u = pore_pressure(loads, pts.reshape(-1, 2)).reshape(-1, samples)
+    wet = np.flatnonzero(u.max(axis=1) > 0)
+    if not wet.size:
+        return
+    size = 0.04 * system.blocks.extent / float(u.max())
+    offset = pts[wet] + size * u[wet][:, :, None] * faces.normal[wet][:, None, :]
+    polys = [np.vstack([p, o[::-1]]) for p, o in zip(pts[wet], offset, strict=True)]
+    ax.add_collection(
+        PolyCollection(
+            polys,
+            facecolors=WATER_COLOR,
+            edgecolors=WATER_COLOR,
+            alpha=0.35,
+            linewidths=0.5,
+            zorder=4,
+            gid="water-pressure",
+        )
+    )
+
+
+def _count(n: int, noun: str) -> str:
+    return f"{n} {noun}" + ("" if n == 1 else "s")
+
+
 def draw_block_ids(ax: Axes, blocks, centroids=None, *, free_only: bool = False) -> None:
     """Block ids written at the centroids (gid ``"block-id"``)."""
     centroids = blocks.centroid if centroids is None else centroids
@@ -248,14 +281,15 @@ def plot_model(
         tails = np.vstack([tails, tails + lift])
     if loads and mdl.loads.water_table:
         draw_water_table(ax, mdl.loads.water_table, blocks)
+        draw_pressure_diagrams(ax, system)
     bolt_handles = draw_bolt_lines(ax, mdl.bolts)
     if block_ids:
         draw_block_ids(ax, blocks, free_only=True)
     c.setup_space_axes(ax, blocks, unit, extra=tails)
     if title is None:
         title = (
-            f"{mdl.name}: {int((~blocks.fixed).sum())} blocks, "
-            f"{system.interfaces.n_interfaces} interfaces"
+            f"{mdl.name}: {_count(int((~blocks.fixed).sum()), 'block')}, "
+            f"{_count(system.interfaces.n_interfaces, 'interface')}"
         )
     ax.set_title(title)
     if legend:
@@ -282,6 +316,7 @@ def plot_model(
             handles.append(Line2D([], [], color=c.SUPPORT_COLOR, lw=2, marker=">", label="support"))
         if loads and mdl.loads.water_table:
             handles.append(Line2D([], [], color=WATER_COLOR, lw=1.5, ls="--", label="water table"))
+            handles.append(Patch(facecolor=WATER_COLOR, alpha=0.35, label="joint water pressure"))
         handles += bolt_handles
         if loads and (any(not p.support for p in mdl.loads.points) or mdl.loads.lines):
             handles.append(Line2D([], [], color=c.LOAD_COLOR, lw=2, marker=">", label="load"))
