@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import shapely
 
@@ -103,6 +105,40 @@ def _split_line_loads(blocks: Blocks, loads: Loads):
             forces.append(0.5 * lengths[ok][:, None] * line.traction(along))
             names += [name] * int(ok.sum())
     return np.concatenate(xy), np.concatenate(forces), names
+
+
+def joint_water(blocks: Blocks, loads: Loads) -> Loads:
+    """The loads whose water table gives the joints' pore pressure.
+
+    The user's water table as it is; for a pore-pressure ratio ``r_u`` the
+    top of the rock ``s(x)`` (:func:`rock_surface`) as the table and
+    ``r_u gamma`` as its unit weight (``gamma``: the free rock's mean unit
+    weight), so that ``u = r_u gamma (s(x) - y)``: the overburden pressure
+    times ``r_u``, integrated exactly as water is.
+    """
+    ru = loads.pore_pressure_ratio
+    if not ru:
+        return loads
+    free = ~blocks.fixed
+    gamma = float(blocks.weight[free].sum() / blocks.area[free].sum())
+    table = rock_surface(blocks)
+    return replace(loads, water_table=table, water_unit_weight=ru * gamma, pore_pressure_ratio=0.0)
+
+
+def rock_surface(blocks: Blocks) -> tuple[tuple[float, float], ...]:
+    """The top of the rock, ``(x, s(x))`` at every vertex abscissa: the highest
+    point of the blocks (free and fixed) on the vertical through it."""
+    rock = shapely.union_all(blocks.polygons())
+    xs = np.unique(shapely.get_coordinates(rock)[:, 0])
+    _, y0, _, y1 = rock.bounds
+    pad = 1.0 + (y1 - y0)
+    lines = shapely.linestrings(
+        np.stack([np.column_stack([xs, np.full_like(xs, y0 - pad)]),
+                  np.column_stack([xs, np.full_like(xs, y1 + pad)])], axis=1)
+    )  # fmt: skip
+    tops = shapely.bounds(shapely.intersection(lines, rock))[:, 3]
+    ok = np.isfinite(tops)
+    return tuple((float(x), float(y)) for x, y in zip(xs[ok], tops[ok], strict=True))
 
 
 def pore_pressure(loads: Loads, points: np.ndarray) -> np.ndarray:

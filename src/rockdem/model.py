@@ -89,6 +89,11 @@ class Loads:
     water_unit_weight : float
         ``gamma_w`` in the model's units (9.81 kN/m^3, 1.0 t/m^3); required
         with a water table.
+    pore_pressure_ratio : float
+        ``r_u`` for a quick check instead of a water table: every joint
+        carries ``u = r_u gamma (s(x) - y)``, ``s`` the top of the rock above
+        the point and ``gamma`` the free rock's mean unit weight
+        (:func:`rockdem.loads.joint_water`).
     """
 
     gravity: bool = True
@@ -98,6 +103,7 @@ class Loads:
     lines: tuple[LineLoad, ...] = ()
     water_table: tuple[tuple[float, float], ...] = ()
     water_unit_weight: float = 0.0
+    pore_pressure_ratio: float = 0.0
 
     def __post_init__(self) -> None:
         for key in ("seismic_h", "seismic_v"):
@@ -106,6 +112,17 @@ class Loads:
                 raise InputError(f"loads {key}", f"{v} is out of range", "use |k| < 1")
         object.__setattr__(self, "points", tuple(self.points))
         object.__setattr__(self, "lines", tuple(self.lines))
+        ru = self.pore_pressure_ratio
+        if not (np.isfinite(ru) and 0.0 <= ru < 1.0):
+            raise InputError(
+                "loads pore_pressure_ratio", f"{ru} is out of range", "use 0 <= r_u < 1"
+            )
+        if ru and self.water_table:
+            raise InputError(
+                "loads pore_pressure_ratio",
+                "is given with a water table",
+                "give either a water table or a pore-pressure ratio",
+            )
         table = tuple((float(x), float(y)) for x, y in self.water_table)
         object.__setattr__(self, "water_table", table)
         if table:

@@ -50,7 +50,7 @@ from typing import Any
 import numpy as np
 
 from .errors import InputError
-from .loads import pore_pressure, water_loads
+from .loads import joint_water, pore_pressure, water_loads
 from .mechanism import slip_polylines
 from .modes import MODES, boundary_contacts, failure_modes
 from .results import CURRENT_NAMES
@@ -116,7 +116,7 @@ def analysis_tables(analysis, modes=None) -> dict[str, list[dict[str, Any]]]:
     b = system.blocks
     d, mech = analysis.displacement, analysis.mechanism
     mode = np.where(b.fixed, "fixed", (modes or failure_modes(analysis)).name)
-    water = water_loads(b, system.interfaces, system.model.loads)
+    water = water_loads(b, system.interfaces, joint_water(b, system.model.loads))
     blocks = [
         {
             "id": int(b.ids[i]),
@@ -174,7 +174,7 @@ def analysis_tables(analysis, modes=None) -> dict[str, list[dict[str, Any]]]:
     s = analysis.springs
     point_xy = system.springs.point
     fos, s_state, s_now = s.local_fos, s.state_name, s.current_name
-    water = pore_pressure(system.model.loads, point_xy)
+    water = pore_pressure(joint_water(system.blocks, system.model.loads), point_xy)
     springs = [
         {
             "interface": int(s.interface[k]),

@@ -32,7 +32,7 @@ from .bolts import Crossings, place_bolts
 from .errors import InputError
 from .interfaces import Interfaces, assign_joints, check_held, find_interfaces
 from .linalg import Factorizer, factorize, norm
-from .loads import block_loads, check_water_table, water_loads
+from .loads import block_loads, check_water_table, joint_water, water_loads
 from .model import Model
 from .relaxation import relax
 from .spring_law import Response, SpringState, evaluate
@@ -117,7 +117,7 @@ def build_system(model: Model, f_block: np.ndarray | None = None) -> System:
     if f_block is None:
         f_block = block_loads(blocks, model.loads)
     check_water_table(blocks, faces, model.loads)
-    f_block = f_block + water_loads(blocks, faces, model.loads)
+    f_block = f_block + water_loads(blocks, faces, joint_water(blocks, model.loads))
     free = ~blocks.fixed
     f_ext = np.zeros(asm.n_dof)
     f_ext[asm.dof[free].ravel()] = f_block[free].ravel()

@@ -56,4 +56,10 @@ def trust_statements(a: Analysis, fos: FactorOfSafety | None = None) -> list[str
             "Water acts on joints below the water table (hydrostatic, on both faces); free "
             "faces are dry and no seepage is computed."
         )
+    ru = a.system.model.loads.pore_pressure_ratio
+    if ru:
+        out.append(
+            f"Water is a pore-pressure ratio r_u = {ru:g}: every joint carries r_u times the "
+            "vertical overburden of rock above it (a quick check, not a flow field)."
+        )
     return out

@@ -81,6 +81,7 @@ def _loads(cfg: ModelFile, names: dict[str, Loc]):
         lines=tuple(lines),
         water_table=tuple(tuple(p) for p in cfg.loads.water_table),
         water_unit_weight=cfg.loads.water_unit_weight or 0.0,
+        pore_pressure_ratio=cfg.loads.pore_pressure_ratio,
     )
 
 

@@ -281,6 +281,10 @@ class LoadsSpec(_Section):
     water_unit_weight: UnitWeight | None = None
     """Unit weight of water in the model's units (9.81 for kN and m, 1.0 for t and m);
     required with a water table."""
+    pore_pressure_ratio: Fraction = 0.0
+    """r_u, a quick check instead of a water table: every joint carries r_u x the
+    vertical overburden pressure of the rock above it (gamma (s - y), s the top of the
+    rock, gamma the free rock's mean unit weight)."""
 
 
 class SupportSpec(_Section):

@@ -163,9 +163,9 @@ def draw_pressure_diagrams(ax: Axes, system, samples: int = 9) -> None:
     """The joint water pressure along every interface below the table, drawn
     as a diagram on the joint (filled, offset along its normal; the largest
     pressure is 4% of the model's size)."""
-    from ..loads import pore_pressure
+    from ..loads import joint_water, pore_pressure
 
-    faces, loads = system.interfaces, system.model.loads
+    faces, loads = system.interfaces, joint_water(system.blocks, system.model.loads)
     t = np.linspace(0.0, 1.0, samples)
     pts = faces.start[:, None, :] + t[None, :, None] * (faces.end - faces.start)[:, None, :]
     u = pore_pressure(loads, pts.reshape(-1, 2)).reshape(-1, samples)
@@ -281,6 +281,7 @@ def plot_model(
         tails = np.vstack([tails, tails + lift])
     if loads and mdl.loads.water_table:
         draw_water_table(ax, mdl.loads.water_table, blocks)
+    if loads and (mdl.loads.water_table or mdl.loads.pore_pressure_ratio):
         draw_pressure_diagrams(ax, system)
     bolt_handles = draw_bolt_lines(ax, mdl.bolts)
     if block_ids:
@@ -316,6 +317,7 @@ def plot_model(
             handles.append(Line2D([], [], color=c.SUPPORT_COLOR, lw=2, marker=">", label="support"))
         if loads and mdl.loads.water_table:
             handles.append(Line2D([], [], color=WATER_COLOR, lw=1.5, ls="--", label="water table"))
+        if loads and (mdl.loads.water_table or mdl.loads.pore_pressure_ratio):
             handles.append(Patch(facecolor=WATER_COLOR, alpha=0.35, label="joint water pressure"))
         handles += bolt_handles
         if loads and (any(not p.support for p in mdl.loads.points) or mdl.loads.lines):
