@@ -292,3 +292,23 @@ def test_measures_compare_a_bolt_pattern():
     bolt_row = c.rows()[1]
     assert bolt_row["reaches_target"] and bolt_row["factor_of_safety"] >= 1.1
     assert "rows of bolts" in bolt_row["note"]
+
+
+def test_the_load_step_a_bolt_first_yields_is_recorded(tmp_path):
+    """Two bolts side by side, capacities 3 and 30: they share the force the
+    block needs, 8.71 x the load factor (4.36 each) until the weak one yields
+    at load factor 3 / 4.36 = 0.69, in load step 4 of 5; the strong one
+    holds.  The bolt table (bolts.csv) carries the step."""
+
+    from rockdem.output import analysis_tables
+
+    model = block_with_bolt(30.0, capacity=3.0, name="weak")
+    strong = Bolt(**{**model.bolts[0].__dict__, "capacity": 30.0, "name": "strong"})
+    model = model.replace(bolts=[*model.bolts, strong], settings=rd.Settings(load_steps=5))
+    an = rd.analyse(model)
+    assert an.stable
+    res = an.bolts
+    assert list(res.name) == ["weak", "strong"]
+    assert list(res.first_yield) == [4, -1]
+    rows = analysis_tables(an)["bolts"]
+    assert [r["first_yield"] for r in rows] == [4, -1]

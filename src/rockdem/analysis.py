@@ -65,6 +65,8 @@ def _settle(
             break
         _, ds = system.assembly.relative_displacement(sol.q)
         new_state = commit(system.springs, state, sol.response, ds, stage)
+        if system.bolts is not None:  # bolts that reached their capacity, and when
+            new_state = new_state.with_bolt_yield(system.bolts.forces(sol.q)[2], stage)
         if total:
             new_state = new_state.without_slip()
         resp, r = residual(system, sol.q, new_state, load_factor, factor)

@@ -326,6 +326,8 @@ class BoltResults:
     shear_force: np.ndarray
     capacity: np.ndarray  # axial capacity at the crossing, per bolt
     yielded: np.ndarray
+    #: stage (load step or strength trial) of the first yield, -1 if never
+    first_yield: np.ndarray | None = None
 
     @property
     def utilisation(self) -> np.ndarray:
@@ -337,8 +339,11 @@ class BoltResults:
         return len(self.depth)
 
 
-def bolt_results(crossings: Crossings | None, q: np.ndarray) -> BoltResults | None:
-    """Bolt forces at free-dof displacements ``q`` (None without bolts)."""
+def bolt_results(
+    crossings: Crossings | None, q: np.ndarray, first_yield: np.ndarray | None = None
+) -> BoltResults | None:
+    """Bolt forces at free-dof displacements ``q`` (None without bolts);
+    ``first_yield``: the stages of first yield (SpringState.bolt_first_yield)."""
     if crossings is None:
         return None
     f, _, yielded = crossings.forces(q)
@@ -355,4 +360,5 @@ def bolt_results(crossings: Crossings | None, q: np.ndarray) -> BoltResults | No
         f[:, 1] * per_bolt,
         crossings.t_max * per_bolt,
         yielded,
+        np.full(crossings.n, -1) if first_yield is None else np.asarray(first_yield),
     )

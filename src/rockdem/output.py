@@ -26,8 +26,10 @@ the strength at the factor the stresses were found at.  ``failure_mode`` (in
 ``bolts.csv`` has a row per joint a bolt crosses (:mod:`rockdem.bolts`):
 ``extension`` and ``offset`` of the bolt across the joint, ``axial_force``
 (tension positive) and ``shear_force`` per bolt, ``axial_capacity`` there
-(steel or bond beyond the joint), ``utilisation`` (axial force / capacity)
-and ``yielded``; only its heading without bolts.
+(steel or bond beyond the joint), ``utilisation`` (axial force / capacity),
+``yielded`` and ``first_yield`` (the load step or strength-reduction stage
+at which it first reached its capacity, -1 never); only its heading
+without bolts.
 
 When the model's ``units`` note names a system (:func:`rockdem.units.parse_units`:
 "kN, m, kPa", "t, m, t/m^2", ...) every CSV heading with a unit carries it in
@@ -222,6 +224,7 @@ def bolt_rows(analysis) -> list[dict[str, Any]]:
             "axial_capacity": float(r.capacity[k]),
             "utilisation": float(use[k]),
             "yielded": bool(r.yielded[k]),
+            "first_yield": int(r.first_yield[k]),
         }
         for k in range(r.n)
     ]
@@ -247,13 +250,15 @@ def _failed(analysis) -> list[dict[str, Any]]:
 
 def bolt_summary(analysis) -> list[dict[str, Any]]:
     """Per bolt: the joints it crosses, its largest axial force (per bolt), the
-    largest utilisation and how many of its crossings have yielded."""
+    largest utilisation, how many of its crossings have yielded, and the
+    stage of its first yield (None: never)."""
     if analysis is None or analysis.bolts is None:
         return []
     r = analysis.bolts
     out = []
     for name in dict.fromkeys(r.name):
         k = r.name == name
+        first = r.first_yield[k][r.first_yield[k] >= 0]
         out.append(
             {
                 "bolt": str(name),
@@ -261,6 +266,7 @@ def bolt_summary(analysis) -> list[dict[str, Any]]:
                 "max_axial_force": float(np.max(r.axial_force[k])),
                 "max_utilisation": float(np.max(r.utilisation[k])),
                 "yielded_crossings": int(r.yielded[k].sum()),
+                "first_yield": int(first.min()) if first.size else None,
             }
         )
     return out
@@ -502,7 +508,7 @@ _COLUMNS = {
     ),
     "bolts": list(
         "bolt interface x y depth extension offset axial_force shear_force axial_capacity "
-        "utilisation yielded".split()
+        "utilisation yielded first_yield".split()
     ),
 }
 

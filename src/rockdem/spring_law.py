@@ -12,7 +12,7 @@ The generalised forces conjugate to ``(dn, ds)`` are ``(-sigma, tau)``.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -36,12 +36,16 @@ class SpringState:
         Has failed in tension (no cohesion or tensile strength any more).
     first_failure : ndarray of int
         Stage (load step or strength trial) of the first failure, -1 if none.
+    bolt_first_yield : ndarray of int or None
+        Stage at which each bolt crossing (rockdem.bolts) first reached its
+        axial capacity, -1 if never; None without bolts.
     """
 
     slip: np.ndarray
     yielded: np.ndarray
     broken: np.ndarray
     first_failure: np.ndarray
+    bolt_first_yield: np.ndarray | None = None
 
     @classmethod
     def initial(cls, n: int) -> SpringState:
@@ -49,7 +53,20 @@ class SpringState:
 
     def without_slip(self) -> SpringState:
         """The same failure flags with the plastic slip set to zero."""
-        return SpringState(np.zeros_like(self.slip), self.yielded, self.broken, self.first_failure)
+        return SpringState(
+            np.zeros_like(self.slip),
+            self.yielded,
+            self.broken,
+            self.first_failure,
+            self.bolt_first_yield,
+        )
+
+    def with_bolt_yield(self, yielded: np.ndarray, stage: int) -> SpringState:
+        """The state with the bolt crossings yielded now recorded (first stage kept)."""
+        first = self.bolt_first_yield
+        first = np.full(len(yielded), -1) if first is None else first
+        first = np.where(yielded & (first < 0), stage, first)
+        return replace(self, bolt_first_yield=first)
 
     @property
     def state(self) -> np.ndarray:
@@ -144,4 +161,4 @@ def commit(
     broken = state.broken | response.open
     newly = (yielded | broken) & (state.first_failure < 0)
     first = np.where(newly, stage, state.first_failure)
-    return SpringState(new_slip, yielded, broken, first)
+    return SpringState(new_slip, yielded, broken, first, state.bolt_first_yield)

@@ -232,6 +232,8 @@ def _print_bolts(doc: dict[str, Any], key: str, title: str) -> None:
     for b in bolts:
         yielded = b["yielded_crossings"]
         state = f", yielded at {_plural(yielded, 'joint')}" if yielded else ""
+        if b.get("first_yield") is not None:
+            state += f" (first at stage {b['first_yield']})"
         out.print(
             f"  {escape(b['bolt'])}: crosses {_plural(b['crossings'], 'joint')}, largest axial "
             f"force {b['max_axial_force']:.4g}{unit} ({100 * b['max_utilisation']:.0f}% of capacity"
