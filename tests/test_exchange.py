@@ -600,3 +600,18 @@ def test_format_options(tmp_path, fos_results):
     )
     assert r.exit_code == 0, r.stderr
     assert (tmp_path / "o" / "blocks.vtu").exists() and (tmp_path / "o" / "result.dxf").exists()
+
+
+def test_results_never_write_over_the_models_drawing(tmp_path):
+    """A section drawn in result.dxf, its results asked for in the same folder
+    as DXF: refused (exit 2, one line), even with --overwrite; the drawing is
+    unchanged."""
+    dxf = draw(tmp_path, name="result.dxf")
+    (tmp_path / "model.yaml").write_text(MODEL.replace("section.dxf", "result.dxf"))
+    before = dxf.read_bytes()
+    res = invoke(
+        "run", tmp_path / "model.yaml", "--out", tmp_path, "--format", "dxf", "--overwrite"
+    )
+    assert res.exit_code == 2, res.output
+    assert "would write result.dxf over" in res.output
+    assert dxf.read_bytes() == before

@@ -186,6 +186,9 @@ def _load(model: Path | None, example: str | None):
     path = _model_path(model, example)
     _check_destination(path)
     m, cfg = load_model(path, max_blocks=_ROOT["max_blocks"])
+    drawing = getattr(getattr(cfg, "geometry", None), "dxf", None)
+    if drawing:  # the section's drawing is an input too: never written over
+        _check_destination(path, (path.parent / drawing).resolve())
     return path, m, cfg
 
 
@@ -207,9 +210,10 @@ def _current_context() -> Any:
     return None
 
 
-def _check_destination(model: Path) -> None:
+def _check_destination(model: Path, *more: Path) -> None:
     """Refuse an ``--out`` the results could not be written to, or that would write
-    over the model file, before the model is read or anything computed.
+    over the model file (or ``more`` inputs: its DXF drawing), before the model is
+    read or anything computed.
 
     Reads the ``--out`` and ``--overwrite`` options of the running command, so
     every command that writes is covered by the one call in :func:`_load`.
@@ -226,12 +230,12 @@ def _check_destination(model: Path) -> None:
             Path(params["out_dir"]),
             _WRITES.get(command, ()),
             overwrite=overwrite,
-            inputs=[model],
+            inputs=[model, *more],
             temp_beside=command in ("run", "fos"),
             refuse_existing=command == "stabilise",
         )
     if params.get("out_file") is not None:
-        _check_out_file(Path(params["out_file"]), inputs=[model])
+        _check_out_file(Path(params["out_file"]), inputs=[model, *more])
 
 
 @contextmanager
