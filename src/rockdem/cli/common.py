@@ -286,14 +286,7 @@ def _trial_hook(bar: Progress, task) -> Callable[[Any], None]:
 
 def _fos_options(cfg) -> dict[str, float]:
     """The strength-reduction settings of the model file (``analysis.strength_reduction``)."""
-    sr = cfg.analysis.strength_reduction
-    return {
-        "width": sr.width,
-        "start": sr.start,
-        "grow": sr.grow,
-        "smallest": sr.smallest,
-        "largest": sr.largest,
-    }
+    return cfg.analysis.strength_reduction.options()
 
 
 def _plural(n: int, word: str) -> str:

@@ -52,6 +52,16 @@ class StrengthReductionSpec(_Section):
     largest: Factor = 100.0
     """Give up (no failure) above this factor."""
 
+    def options(self) -> dict[str, float]:
+        """The keywords of :func:`rockdem.factor_of_safety` these settings give."""
+        return {
+            "width": self.width,
+            "start": self.start,
+            "grow": self.grow,
+            "smallest": self.smallest,
+            "largest": self.largest,
+        }
+
     @model_validator(mode="after")
     def _order(self) -> StrengthReductionSpec:
         if not self.smallest < self.start < self.largest:

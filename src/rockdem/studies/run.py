@@ -204,17 +204,6 @@ def prepare(model, spec=None, *, max_blocks: int | None = MAX_BLOCKS) -> Plan:
 
 
 # ================================================================ one sample
-def _fos_options(cfg) -> dict[str, float]:
-    sr = cfg.analysis.strength_reduction
-    return {
-        "width": sr.width,
-        "start": sr.start,
-        "grow": sr.grow,
-        "smallest": sr.smallest,
-        "largest": sr.largest,
-    }
-
-
 def _value(v: float, whole: bool):
     return int(v) if whole else float(v)
 
@@ -250,7 +239,7 @@ def evaluate(
         if compute == "fos":
             from ..analysis import factor_of_safety
 
-            f = factor_of_safety(model, **_fos_options(cfg))
+            f = factor_of_safety(model, **cfg.analysis.strength_reduction.options())
             lo, hi = f.bracket
             row.update(fs=f.value, fs_low=lo, fs_high=hi, mode=f.mode, proof=f.proof)
             if f.value is not None:
