@@ -312,3 +312,11 @@ def test_the_load_step_a_bolt_first_yields_is_recorded(tmp_path):
     assert list(res.first_yield) == [4, -1]
     rows = analysis_tables(an)["bolts"]
     assert [r["first_yield"] for r in rows] == [4, -1]
+
+
+def test_a_bolt_longer_than_the_model_is_cut_at_the_model():
+    """A 1e9-long bolt (the file format's largest length) behaves as one that
+    passes through everything below its head."""
+    short = rd.factor_of_safety(block_with_bolt(30.0))
+    long = rd.factor_of_safety(block_with_bolt(30.0, length=1e9))
+    assert long.value == pytest.approx(short.value, rel=1e-3)

@@ -212,8 +212,10 @@ def place_bolts(bolts, blocks, faces, asm):
         where = f"bolts {bolt.name}" if bolt.name else "bolts"
         e = bolt.direction
         head = np.asarray(bolt.head)
-        # the head may sit a little off the face (rounded coordinates): 1% of the length
-        probe = shapely.points(head + max(10 * tol, HEAD_REACH * bolt.length) * e)
+        # the head may sit a little off the face (rounded coordinates): 1% of the
+        # length, and of the model's size for a bolt longer than the model
+        reach = HEAD_REACH * min(bolt.length, blocks.extent)
+        probe = shapely.points(head + max(10 * tol, reach) * e)
         if not len(tree.query(probe, predicate="intersects")):
             raise InputError(
                 where,
