@@ -287,3 +287,21 @@ def test_no_pyplot_state(analysis):
     plots.plot_failure(analysis)
     if before is not None:
         assert before.get_fignums() == []
+
+
+def test_failure_picture_draws_the_support_forces():
+    """A support force (an anchor) is part of the state shown: drawn as in the
+    model picture, with a legend entry."""
+    import rockdem as rd
+    from rockdem import plots
+    from rockdem import verification as V
+
+    anchor = rd.PointLoad.anchor(1.0, 0.5, 5.0, 195.0, name="anchor")
+    joint = rd.Joint(normal_stiffness=1e6, friction_angle=20)
+    model = V.block_on_plane(30, joint, loads=rd.Loads(points=(anchor,)))
+    ax = plots.plot_failure(rd.analyse(model))
+    assert any(p.get_gid() == "support" for p in ax.patches)
+    from rockdem.plots.state import failure_legend
+
+    legend = failure_legend(ax)
+    assert "support" in [t.get_text() for t in legend.get_texts()]

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -16,7 +16,7 @@ from ..modes import MODES, boundary_contacts, failure_modes
 from ..results import CURRENT_LABELS, CURRENT_NAMES, format_factor
 from . import _common as c
 from .bolts import draw_bolt_forces
-from .model import draw_block_ids, draw_blocks
+from .model import draw_block_ids, draw_blocks, draw_loads
 
 
 @dataclass(frozen=True)
@@ -181,9 +181,16 @@ def plot_failure(
     )
     if frame.final and system.bolts is not None:
         handles += draw_bolt_forces(ax, a)
+    tails = np.zeros((0, 2))
+    supports = tuple(p for p in system.model.loads.points if p.support)
+    if supports:  # the support forces the state carries
+        mdl = system.model
+        only = mdl.replace(loads=replace(mdl.loads, points=supports, lines=()))
+        _, tails = draw_loads(ax, only, blocks)
+        handles.append(Line2D([], [], color=c.SUPPORT_COLOR, lw=2, marker=">", label="support"))
     if block_ids:
         draw_block_ids(ax, blocks, free_only=True)
-    c.setup_space_axes(ax, blocks, unit, scale_bar=scale_bar)
+    c.setup_space_axes(ax, blocks, unit, scale_bar=scale_bar, extra=tails)
     if title is None:
         title = state_title(a, fos) if frame.final else f"Failure state: {frame.label}"
     ax.set_title(title)
