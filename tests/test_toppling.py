@@ -237,3 +237,20 @@ def test_the_search_does_not_stop_at_a_newton_stall(grow):
     fos = rd.factor_of_safety(model, grow=grow)
     assert fos.value == pytest.approx(le, rel=0.02)
     assert fos.failed_analysis.evidence.proof in {"lp-certificate", "dynamic-relaxation"}
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason=(
+        "known wrong verdict, measured: with a 72 or 75 degree face the search "
+        "stops at a Newton stall (DEM 0.357 / 0.249 against Goodman & Bray 0.431 / "
+        "0.374), and the relaxation beyond it, still moving after 4,000 steps, is "
+        "taken for the mechanism; relaxation in 1,000-step runs from rest finds "
+        "equilibrium at 0.26-0.37 for the 75 degree face.  Starting every window "
+        "from rest (kinetic damping) gives 0.3740 but hides the wedge's mechanism "
+        "at 1.05 FS and changes paper 6.1's mechanism with the schedule"
+    ),
+)
+def test_steep_face_columns_match_goodman_and_bray():
+    model, le = columns(75.0)
+    assert rd.factor_of_safety(model).value == pytest.approx(le, rel=0.03)
