@@ -625,7 +625,9 @@ def write_report(
         f"<h1>{_esc(title)}</h1>",
         f'<p class="meta">rockdem {_esc(__version__)} · {_esc(now)}</p>',
         '<nav><a href="#results">Verdict</a><a href="#tables">Failed joints</a>'
-        '<a href="#trust">Trust</a><a href="#pictures">Pictures</a>'
+        '<a href="#trust">Trust</a>'
+        + ('<a href="#limit-equilibrium">Limit equilibrium</a>' if fos is not None else "")
+        + '<a href="#pictures">Pictures</a>'
         '<a href="#progressive">Progressive failure</a>'
         '<a href="#inputs">Inputs</a></nav>',
         '<h2 id="results">Verdict</h2>',

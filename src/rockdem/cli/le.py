@@ -15,6 +15,7 @@ from typing import Any
 from rich.markup import escape
 from rich.table import Table
 
+from ..limit_equilibrium.report import signed_percent
 from ..units import parse_units
 from .common import (
     DebugOpt,
@@ -116,7 +117,7 @@ def _print_sarma(doc: dict[str, Any], r, fos, units) -> None:
         return
     line = f"Sarma (limit equilibrium) on the DEM's mechanism: [bold]{r.fos:.4f}[/bold]"
     if r.difference is not None:
-        line += f" ({100 * r.difference:+.1f}% against the DEM)"
+        line += f" ({signed_percent(r.difference)} against the DEM)"
     out.print(line)
     if r.critical_acceleration is not None:
         out.print(

@@ -26,7 +26,7 @@ def html_section(fos: FactorOfSafety) -> list[str]:
     )
     if r.fos is None:
         return [head, intro, f"<p><b>No limit-equilibrium factor:</b> {_esc(r.reason)}.</p>"]
-    diff = "" if r.difference is None else f" ({100 * r.difference:+.1f}% against the DEM)"
+    diff = "" if r.difference is None else f" ({signed_percent(r.difference)} against the DEM)"
     rows = [
         [
             str(i),
@@ -62,3 +62,8 @@ def html_section(fos: FactorOfSafety) -> list[str]:
         + "".join(f"<li>{_esc(n)}</li>" for n in r.notes)
         + "</ul>",
     ]
+
+
+def signed_percent(x: float) -> str:
+    """``x`` as a signed percentage to 0.1, never "-0.0%"."""
+    return f"{round(100 * x, 1) + 0.0:+.1f}%"
