@@ -415,3 +415,11 @@ def test_report_says_why_there_is_no_factor_for_toppling(tmp_path):
     path = write_report(toppling_block(30.0, 0.3, 2.0), tmp_path, animation=False)
     html = path.read_text()
     assert "No limit-equilibrium factor" in html and "rotates" in html
+
+
+def test_differences_print_without_a_negative_zero():
+    from rockdem.limit_equilibrium.report import signed_percent
+
+    assert signed_percent(-0.0004) == "+0.0%"
+    assert signed_percent(0.0123) == "+1.2%"
+    assert signed_percent(-0.05) == "-5.0%"
