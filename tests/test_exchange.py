@@ -15,7 +15,8 @@ import pytest
 from typer.testing import CliRunner
 
 import rockdem as rd
-from rockdem.cli import EXIT_INPUT, app
+from _cli import assert_refused as refused
+from rockdem.cli import app
 from rockdem.config import load_model, parse_model
 from rockdem.exchange.dxf_in import cut_section, example_dxf, read_section
 from rockdem.exchange.dxf_out import write_dxf, write_section_dxf
@@ -29,17 +30,6 @@ SITE = (5.0e5, 7.0e6)  # a mine grid / UTM northing
 
 def invoke(*args):
     return runner.invoke(app, [str(a) for a in args])
-
-
-def refused(r, *fragments: str) -> str:
-    """Exit 2 and one line on stderr holding every fragment (no traceback)."""
-    assert r.exit_code == EXIT_INPUT, (r.exit_code, r.stdout, r.stderr)
-    lines = r.stderr.strip().splitlines()
-    assert len(lines) == 1, r.stderr
-    assert lines[0].startswith("error: ") and "Traceback" not in r.stderr
-    for fragment in fragments:
-        assert fragment in lines[0], lines[0]
-    return lines[0]
 
 
 # ------------------------------------------------------------------ a section

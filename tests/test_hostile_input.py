@@ -26,6 +26,7 @@ import numpy as np
 import pytest
 
 import rockdem as rd
+from _cli import assert_refused
 from _models import BOX, SLOPE
 from rockdem.config import ModelFileError, parse_model
 from rockdem.config.parse import MAX_DEPTH, MAX_FILE_BYTES, MAX_NODES
@@ -105,17 +106,6 @@ def inproc(*args, cwd: Path, limit: float = 10.0) -> _Run:
         os.chdir(old)
     assert elapsed < limit, f"took {elapsed:.1f} s"
     return _Run(r.exit_code, r.stdout, r.stderr, elapsed)
-
-
-def assert_refused(r, *fragments: str) -> str:
-    """Exit 2 with one line on stderr holding every fragment; the line."""
-    assert r.returncode == 2, (r.returncode, r.stdout, r.stderr)
-    lines = r.stderr.strip().splitlines()
-    assert len(lines) == 1, r.stderr
-    assert "Traceback" not in r.stderr and lines[0].startswith("error: ")
-    for fragment in fragments:
-        assert fragment in lines[0], lines[0]
-    return lines[0]
 
 
 def check(tmp_path: Path, text: str, name: str = "m.yaml", *extra, child: bool = False):

@@ -24,6 +24,7 @@ from scipy import stats
 from typer.testing import CliRunner
 
 import rockdem
+from _cli import assert_refused as refused
 from rockdem.cli import app
 from rockdem.config import load_model
 from rockdem.studies import sampling
@@ -81,17 +82,6 @@ def same_table(a, b) -> None:
 
 def invoke(*args):
     return runner.invoke(app, [str(a) for a in args])
-
-
-def refused(r, *fragments: str) -> str:
-    """Exit 2, one line on stderr holding every fragment."""
-    assert r.exit_code == 2, (r.exit_code, r.output)
-    lines = r.stderr.strip().splitlines()
-    assert len(lines) == 1, r.stderr
-    assert lines[0].startswith("error: ")
-    for f in fragments:
-        assert f in lines[0], lines[0]
-    return lines[0]
 
 
 # ------------------------------------------------------------- closed form
