@@ -10,6 +10,11 @@ elastic, sliding and open), so plain Newton may cycle; we use
 * a Levenberg-Marquardt shift ``beta K0`` (``K0`` the elastic stiffness):
   ``beta`` grows x10 when the line search fails and shrinks /10 after a
   full step; beyond ``BETA_MAX`` the solve gives up;
+* a trust radius: a step longer than the larger of the elastic displacement
+  and the distance already travelled is solved again with ``beta`` raised to
+  fit (a block whose springs all slide or open has no tangent stiffness, and
+  the unshifted step throws it far; shrinking ``beta``'s x10 ladder one
+  failed line search at a time cost ~4 factorisations per such step);
 * a backtracking line search on the scaled residual norm.
 
 Convergence is scale-free: moments are divided by the mean block size and
@@ -41,6 +46,10 @@ from .springs import Springs, place_springs
 log = logging.getLogger(__name__)
 
 BETA_START = 1e-6
+#: a Newton step may move no dof by more than this multiple of the larger of
+#: the elastic displacement and the distance already travelled in the solve
+#: (scaled); a longer step is re-solved with the shift raised to fit
+TRUST_RADIUS = 1.0
 BETA_MAX = 0.1
 LINE_SEARCH_HALVINGS = 8
 #: displacements beyond this multiple of the elastic response are a mechanism
@@ -195,6 +204,10 @@ def _newton(system, state, load_factor, factor, q, max_it):
     singular; the shift ``beta K0`` (``K0`` the elastic stiffness) bounds the
     step.  ``beta`` rises x10 when the line search fails and falls /10 after
     a full step; the solve gives up when ``beta`` exceeds ``BETA_MAX``.
+    A step that would move a dof farther than ``TRUST_RADIUS`` x the larger
+    of the elastic displacement and the distance travelled since the start
+    is re-solved with ``beta`` scaled up by the excess (the free mode's step
+    is ~ 1 / beta).
     """
     asm = system.assembly
     scale = asm.dof_scale
@@ -206,6 +219,7 @@ def _newton(system, state, load_factor, factor, q, max_it):
     beta = BETA_START
     bound = BLOWUP * system.elastic_scale * max(load_factor, 1e-12)
     direction = np.zeros_like(q)
+    q_start, reach = q, system.elastic_scale * load_factor
     for it in range(1, max_it + 1):
         if merit <= tol:
             return Solve(True, q, resp, it - 1, history, "converged", direction)
@@ -216,6 +230,14 @@ def _newton(system, state, load_factor, factor, q, max_it):
                 return Solve(False, q, resp, it, history, "singular tangent", direction)
             continue
         step = lu.solve(r)
+        size = np.max(np.abs(step / scale))
+        radius = TRUST_RADIUS * max(reach, np.max(np.abs((q - q_start) / scale)))
+        if size > radius:  # a near-free mode of the tangent: raise the shift to fit
+            beta = min(beta * size / radius, BETA_MAX)
+            lu = _lu(system, tangent(system, resp, q, beta))
+            if lu is None:
+                continue
+            step = lu.solve(r)
         direction = step
         alpha, accepted = 1.0, False
         for _ in range(LINE_SEARCH_HALVINGS):
