@@ -87,6 +87,9 @@ class Relaxation:
     late: np.ndarray | None = None
     #: the unbalanced force was still falling at the end (see DECAYING)
     settling: bool = False
+    #: displacements in each of the last windows of a mechanism's run (its
+    #: last half: ACCELERATING of the WINDOWS)
+    windows: tuple[np.ndarray, ...] = ()
 
     def __str__(self) -> str:
         return (
@@ -183,7 +186,8 @@ def relax(
         moving = (motion > MECHANISM_MOTION or accelerating) and late_low > STEADY_FORCE * tolerance
         late = None if late_start is None else q - late_start
         if moving and not settling:
-            return Relaxation("mechanism", q, step, float(ratio), motion, late)
+            windows = tuple(b - a for a, b in itertools.pairwise(marks))
+            return Relaxation("mechanism", q, step, float(ratio), motion, late, windows=windows)
         if not (settling and step + max_steps <= budget):
             return Relaxation("undecided", q, step, float(ratio), motion, late, settling)
         # settling: one more segment
