@@ -269,15 +269,18 @@ def test_the_search_does_not_stop_at_a_newton_stall(grow):
 @pytest.mark.xfail(
     strict=True,
     reason=(
-        "known wrong verdict, measured: with a 72 or 75 degree face the search "
-        "stops at a Newton stall (DEM 0.357 / 0.249 against Goodman & Bray 0.431 / "
-        "0.374), and the relaxation beyond it, still moving after 4,000 steps, is "
-        "taken for the mechanism; relaxation in 1,000-step runs from rest finds "
-        "equilibrium at 0.26-0.37 for the 75 degree face.  Starting every window "
-        "from rest (kinetic damping) gives 0.3740 but hides the wedge's mechanism "
-        "at 1.05 FS and changes paper 6.1's mechanism with the schedule"
+        "known wrong verdict, measured: with a 72 degree face the search stops at a "
+        "Newton stall (DEM 0.358 against Goodman & Bray 0.431): the stall check's "
+        "relaxation at 0.358 is undecided after 4,000 steps, and the run 2% beyond "
+        "moves x10.9 its elastic response in its last quarter, which reads as a "
+        "mechanism.  70 and 75 degrees match (0.474 / 0.374) but are chaotic: before "
+        "the relaxation's forces were summed in another order, 70 matched and 75 "
+        "gave 0.249; with that order and a weaker motion test (1x elastic) 70 gave "
+        "0.319.  Starting every window from rest (kinetic damping) gave 0.3740 at 75 "
+        "but hid the wedge's mechanism at 1.05 FS"
     ),
 )
 def test_steep_face_columns_match_goodman_and_bray():
-    model, le = columns(75.0)
-    assert rd.factor_of_safety(model).value == pytest.approx(le, rel=0.03)
+    for face in (70.0, 72.0, 75.0):
+        model, le = columns(face)
+        assert rd.factor_of_safety(model).value == pytest.approx(le, rel=0.03), face

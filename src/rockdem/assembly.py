@@ -70,7 +70,7 @@ class Assembly:
 
     def internal_force(self, force: np.ndarray) -> np.ndarray:
         """``sum_k w_k B_k^T p_k`` for generalised forces ``p`` (n_springs, 2)."""
-        return self._operator_t @ (force * self.weight[:, None]).ravel()
+        return self.weighted_transpose @ np.ascontiguousarray(force).ravel()
 
     @cached_property
     def _left(self) -> np.ndarray:
@@ -85,11 +85,14 @@ class Assembly:
         valid = np.flatnonzero(self.scatter >= 0)
         ones = np.ones(len(valid))
         shape = (self.nnz, len(self.scatter))
-        return sp.csr_array((ones, (self.scatter[valid], valid)), shape=shape)
+        return compact_indices(sp.csr_array((ones, (self.scatter[valid], valid)), shape=shape))
 
     @cached_property
-    def _operator_t(self) -> sp.csr_array:
-        return compact_indices(sp.csr_array(self.operator.T))
+    def weighted_transpose(self) -> sp.csr_array:
+        """``B^T W``: internal forces from the flat forces ``p.ravel()`` in one
+        sparse product (every residual and every explicit step)."""
+        w = sp.diags_array(np.repeat(self.weight, 2))
+        return compact_indices(sp.csr_array(self.operator.T @ w))
 
     def stiffness(self, d_nn, d_sn, d_ss, shift: float = 0.0, base=None) -> sp.csc_array:
         """Tangent ``sum w B^T D B`` (+ ``shift * base``) on the fixed pattern.

@@ -17,7 +17,7 @@ explicit dynamics of the blocks, the scheme of UDEC and PFC (Cundall 1987):
 The run ends in one of three ways.  ``equilibrium``: the unbalanced force
 fell below ``tolerance`` of the loads (the caller polishes with Newton).
 ``mechanism``: the budget ran out with blocks still moving: over the
-last quarter of the run some block moved more than its elastic response,
+last quarter of the run some block moved more than 3x its elastic response,
 or the blocks kept accelerating (the motion of each of the last four
 eighths of the run no less than that of the one before), while the
 unbalanced force stayed well above the tolerance (UDEC's "unbalanced force
@@ -48,8 +48,10 @@ TOLERANCE = 1e-7
 #: (the next margin only if the first leaves it undecided)
 CONFIRM_MARGINS = (0.02, 0.05)
 #: still failing at the end if, over the last quarter of the run, some block
-#: moved more than its elastic response ...
-MECHANISM_MOTION = 1.0
+#: moved more than this multiple of its elastic response ... (at 1x, toppling
+#: columns settling slowly at 2% beyond a 70-degree face's Newton stall, an
+#: unbalanced force of 1e-5 of the loads, read as a mechanism)
+MECHANISM_MOTION = 3.0
 #: ... while the unbalanced force never fell below this multiple of the tolerance
 STEADY_FORCE = 30.0
 #: or: the motion over each of the last ACCELERATING windows (an eighth of the
@@ -129,9 +131,12 @@ def relax(
     # the same law and equations as Newton; the strengths are fixed for the run
     strengths = strength(springs, state, factor, system.model.settings.reduce_tensile)
 
+    B, BtW = asm.operator, asm.weighted_transpose
+    p = np.empty((springs.n_springs, 2))  # spring forces, written in place each step
+
     def unbalanced(q_):
-        dn, ds = asm.relative_displacement(q_)
-        r_ = f - asm.internal_force(forces(springs, state.slip, strengths, dn, ds))
+        d = (B @ q_).reshape(-1, 2)
+        r_ = f - BtW @ forces(springs, state.slip, strengths, d[:, 0], d[:, 1], p).ravel()
         if system.bolts is not None:
             r_ -= system.bolts.internal_force(q_)
         return r_
