@@ -14,6 +14,14 @@ depends only on the pattern is done once per model:
 
 ``ROCKDEM_SOLVER=superlu`` forces SuperLU.  :func:`backend` tells which one
 runs (``rockdem check`` prints it).
+
+**Reproducible runs.**  Threaded PARDISO sums in an order that changes from
+run to run (measured: two different elastic solutions, in the last bits,
+over six runs of the same 1,021-block model), and the explicit dynamics
+that confirms failures is chaotic: those bits can change a verdict.  MKL's
+conditional numerical reproducibility (``MKL_CBWR=AUTO``) is therefore set
+before MKL loads, unless the user set ``MKL_CBWR``: the same model gives
+the same numbers on the same machine with the same number of threads.
 """
 
 from __future__ import annotations
@@ -25,6 +33,9 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 _PYPARDISO: object = False  # not looked for yet; None when not installed
+
+#: MKL reads this when it loads (first PARDISO handle): reproducible results
+os.environ.setdefault("MKL_CBWR", "AUTO")
 
 
 def _pardiso_module():
