@@ -147,17 +147,12 @@ def trial_stresses(springs: Springs, slip, strengths, dn, ds):
 def forces(springs: Springs, slip, strengths, dn, ds, out=None) -> np.ndarray:
     """Generalised forces ``(-sigma, tau)`` only (no tangent), shape (n, 2):
     for explicit dynamics, where the strengths are fixed for the whole run.
-    ``out``: an (n, 2) array to write into (no temporaries in the hot loop)."""
-    c, tan_phi, tensile = strengths
+    ``out``: an (n, 2) array to write into (called every explicit step)."""
+    _, sigma, raw_cap, tau_trial = trial_stresses(springs, slip, strengths, dn, ds)
     out = np.empty((len(dn), 2)) if out is None else out
-    minus_sigma, tau = out[:, 0], out[:, 1]
-    np.multiply(springs.kn, dn, out=minus_sigma)
-    np.minimum(minus_sigma, tensile, out=minus_sigma)
-    cap = c - minus_sigma * tan_phi
-    np.maximum(cap, 0.0, out=cap)
-    np.subtract(ds, slip, out=tau)
-    tau *= springs.ks
-    np.clip(tau, -cap, cap, out=tau)
+    np.negative(sigma, out=out[:, 0])
+    cap = np.maximum(raw_cap, 0.0, out=raw_cap)
+    np.clip(tau_trial, -cap, cap, out=out[:, 1])
     return out
 
 
