@@ -266,7 +266,7 @@ def _newton(system, state, load_factor, factor, q, max_it):
     return Solve(False, q, resp, max_it, history, "iteration limit", direction)
 
 
-def _release(system, state, load_factor, factor, max_it) -> Solve:
+def _release(system, state, load_factor, factor, max_it, resume=None) -> Solve:
     """Solve from scratch by releasing fictitious strength.
 
     At zero displacement every spring sits on the apex of its Coulomb cone
@@ -275,6 +275,8 @@ def _release(system, state, load_factor, factor, max_it) -> Solve:
     elastic spring stress: at ``s = 1`` nothing fails and the elastic solution
     is exact) and release it, ``s -> 0`` geometrically, each solve starting
     from the last.  ``reached`` reports the smallest ``s`` that converged.
+    ``resume = (s, q)``: start from a release that got down to ``s`` (at
+    another strength factor) instead of from ``s = 1``.
     """
     asm = system.assembly
     springs = system.springs
@@ -285,6 +287,8 @@ def _release(system, state, load_factor, factor, max_it) -> Solve:
     total, history = 0, []
     s_ok, ratio = None, RELEASE_RATIO
     s = 1.0
+    if resume is not None:
+        s, q = resume
     while True:
         fict = s * ref
         relaxed = replace(
@@ -381,7 +385,11 @@ def solve_equilibrium(
         F_try = target
         for _ in range(HOMOTOPY_TRIES):
             F_try *= 0.5
-            weak = _release(system, state, load_factor, F_try, max_it)
+            # from the last released state (stronger joints hold it), else afresh
+            weak = _release(system, state, load_factor, F_try, max_it, (start.reached, start.q))
+            if weak.reached is None:
+                total += weak.iterations
+                weak = _release(system, state, load_factor, F_try, max_it)
             total += weak.iterations
             if weak.converged:
                 F_ok, q_ok = F_try, weak.q
