@@ -128,9 +128,10 @@ print(hashlib.sha1(system.lu0.solve(system.f_ext).tobytes() + a.displacement.tob
 
 
 def test_the_same_model_gives_the_same_bits_in_every_run():
-    """Threaded PARDISO summed in an order that depends on its threads (MKL
-    picks their number by the machine's load): the 1,021-block brick slope
-    gave three different elastic solutions, and relaxation's chaos can turn
+    """Threaded PARDISO summed in an order that changed from run to run and
+    with the number of threads: six runs of the 1,021-block brick slope gave
+    two different elastic solutions, one thread a third, and relaxation's
+    chaos can turn
     those bits into another verdict.  With MKL's reproducible mode
     (rockdem.linalg), fresh processes on 1 and 2 threads agree to the bit on
     the elastic solution and the staged analysis (without it, 1 and 2
