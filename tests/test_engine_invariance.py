@@ -131,8 +131,7 @@ def test_the_same_model_gives_the_same_bits_in_every_run():
     """Threaded PARDISO summed in an order that changed from run to run and
     with the number of threads: six runs of the 1,021-block brick slope gave
     two different elastic solutions, one thread a third, and relaxation's
-    chaos can turn
-    those bits into another verdict.  With MKL's reproducible mode
+    chaos can turn those bits into another verdict.  With MKL's reproducible mode
     (rockdem.linalg), fresh processes on 1 and 2 threads agree to the bit on
     the elastic solution and the staged analysis (without it, 1 and 2
     threads differ)."""
