@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import numpy as np
 import shapely
-from scipy.optimize import brentq
 
 from .blocks import Blocks
 from .joints import Joint
@@ -93,6 +92,8 @@ def wedge_fos(w1, w2, d1, d2, p1, p2, p3) -> float:
         np.tan(np.radians(p1)) / np.tan(np.radians(d1)),
         np.tan(np.radians(p2)) / np.tan(np.radians(d2)),
     )
+    from scipy.optimize import brentq  # 0.13 s to import: not at start-up
+
     f = brentq(thrust, 0.2, 5.0, xtol=1e-12)
     q1, _, q3 = np.radians(reduced(f))
     d = np.radians(d1)

@@ -22,7 +22,6 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.optimize import brentq
 
 from ..errors import InputError, check_number
 from ..verification import wedge_fos, wedge_thrust
@@ -418,6 +417,8 @@ def toppling_fos(
     if values[-1] <= 0:
         return float("inf")
     k = int(np.argmax(values > 0))
+    from scipy.optimize import brentq  # 0.13 s to import: not at start-up
+
     return float(brentq(support, grid[k - 1], grid[k], xtol=1e-12))
 
 

@@ -35,7 +35,6 @@ from __future__ import annotations
 from dataclasses import dataclass, field, replace
 
 import numpy as np
-from scipy.optimize import brentq
 from scipy.sparse import coo_array
 from scipy.sparse.csgraph import connected_components
 
@@ -388,6 +387,8 @@ def _solve_component(members, own, f_body, weight, vx):
     else:
         k = int(np.argmax(ok & (values <= 0)))
         lo = grid[k - 1]
+        from scipy.optimize import brentq  # 0.13 s to import: not at start-up
+
         fos = float(brentq(kc, lo, grid[k], xtol=1e-12))
         x = solve(fos)
     total = float(weight[members].sum())
