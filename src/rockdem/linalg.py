@@ -7,7 +7,9 @@ depends only on the pattern is done once per model:
   MKL wheels exist): a :class:`Factorizer` keeps one PARDISO handle; the
   symbolic analysis (fill-reducing ordering) runs on the first matrix and
   every later tangent is only refactorised numerically (phase 22), then
-  solved (phase 33).  The MKL library is located once per process.
+  solved (phase 33) without the two default steps of iterative refinement
+  (each a further solve; 29,000 unknowns: solve 0.027 -> 0.016 s, relative
+  residual 1e-12 either way).  The MKL library is located once per process.
 * **SuperLU** (SciPy, always available): a fresh LU per matrix with the
   minimum-degree ordering of ``A + A^T`` (the pattern is structurally
   symmetric), which fills in much less than COLAMD here.
@@ -140,6 +142,12 @@ class Factorizer:
         except _pardiso_module().pardiso_wrapper.PyPardisoError as exc:
             self._key = None  # analyse again next time
             raise RuntimeError(f"PARDISO: {exc}") from exc
+        if phase == 12:  # PARDISO filled iparm with its defaults: keep them, but ...
+            self._solver.iparm[0] = 1
+            # ... refine the solution iteratively only where pivots were perturbed
+            # (the default, 2 steps always, makes each solve cost 3; Newton
+            # measures its own residual)
+            self._solver.iparm[7] = 0
         self.generation += 1
         return _PardisoFactor(self, self.generation)
 
