@@ -152,10 +152,33 @@ def test_cli_toppling_says_what_else_is_needed(app):
     assert "NOT REACHED" in r.output and "toppling" in r.output and "needed instead" in r.output
 
 
-def test_cli_bad_target_is_an_input_error(app):
+def test_cli_results_appear_all_or_nothing(app, tmp_path, monkeypatch):
+    """A failure while the pictures are drawn (disk full, say) leaves the
+    folder's earlier results as they were and adds nothing half-written."""
+    import rockdem.stabilisation as stab
+
+    out = tmp_path / "res"
+    out.mkdir()
+    (out / "removal.csv").write_text("the user's own table\n")
+
+    def full_disk(*args, **kwargs):
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(stab, "save_pictures", full_disk)
+    r = CliRunner().invoke(app, ["stabilise", "--example", "inclined-layers", "--no-support",
+                                 "--quiet", "--out", str(out), "--overwrite"])
+    assert r.exit_code != 0
+    assert [p.name for p in out.iterdir()] == ["removal.csv"]
+    assert (out / "removal.csv").read_text() == "the user's own table\n"
+    assert [p.name for p in tmp_path.iterdir()] == ["res"]  # no temporary folder left
+
+
+@pytest.mark.parametrize("target", ["0", "-1", "nan", "1e9"])
+def test_cli_bad_target_is_an_input_error(app, target):
     r = CliRunner().invoke(app, ["stabilise", "--example", "wedge-verification",
-                                 "--target-fos", "0"])
+                                 "--target-fos", target])
     assert r.exit_code == 2
+    assert "target-fos" in " ".join(r.output.split())
 
 
 def test_pictures_one_per_trial(tmp_path):

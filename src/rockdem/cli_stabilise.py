@@ -32,7 +32,8 @@ def stabilise(
             "--target-fos",
             "-t",
             min=0.0,
-            help="Factor of safety to reach "
+            max=20.0,
+            help="Factor of safety to reach, 0 < F <= 20 "
             "(default: stabilisation.target_fos of the file, else 1.3).",
         ),
     ] = None,
@@ -76,8 +77,9 @@ def stabilise(
         from .units import parse_units
 
         path, m, cfg = _load(model, example)
-        if target_fos is not None and not target_fos > 0:
-            raise InputError("--target-fos", f"{target_fos}", "give a value > 0")
+        if target_fos is not None and not 0 < target_fos <= 20:
+            # the same range as stabilisation.target_fos in a model file
+            raise InputError("--target-fos", f"{target_fos} is out of range", "give 0 < F <= 20")
         if (
             out_dir is not None
             and out_dir.exists()
@@ -157,30 +159,27 @@ def write(folder: Path, result, doc: dict[str, Any], units=None) -> list[Path]:
     import csv
     import json
 
-    from .output import column_units, csv_header, jsonable
+    from .output import column_units, csv_header, jsonable, staged_folder
     from .stabilisation import save_pictures
 
-    folder.mkdir(parents=True, exist_ok=True)
-    files = []
-    path = folder / "stabilisation.json"
-    path.write_text(json.dumps(jsonable(doc), indent=1, allow_nan=False), encoding="utf-8")
-    files.append(path)
-    for name, rows in result.tables().items():
-        if not rows:
-            continue
-        path = folder / f"{name}.csv"
-        columns = list(rows[0])
-        unit_map = column_units(columns, units)
-        with path.open("w", newline="", encoding="utf-8") as fh:
-            w = csv.writer(fh, lineterminator="\n")
-            w.writerow([csv_header(c, unit_map) for c in columns])
-            for r in rows:
-                w.writerow(
-                    [" ".join(map(str, v)) if isinstance(v, list) else v for v in r.values()]
-                )
-        files.append(path)
-    files += save_pictures(result, folder)
-    return files
+    with staged_folder(folder) as tmp:  # all or nothing
+        path = tmp / "stabilisation.json"
+        path.write_text(json.dumps(jsonable(doc), indent=1, allow_nan=False), encoding="utf-8")
+        for name, rows in result.tables().items():
+            if not rows:
+                continue
+            columns = list(rows[0])
+            unit_map = column_units(columns, units)
+            with (tmp / f"{name}.csv").open("w", newline="", encoding="utf-8") as fh:
+                w = csv.writer(fh, lineterminator="\n")
+                w.writerow([csv_header(c, unit_map) for c in columns])
+                for r in rows:
+                    w.writerow(
+                        [" ".join(map(str, v)) if isinstance(v, list) else v for v in r.values()]
+                    )
+        save_pictures(result, tmp)
+        names = sorted(p.name for p in tmp.iterdir())
+    return [folder / name for name in names]
 
 
 def _f(v) -> str:

@@ -46,6 +46,8 @@ import math
 import os
 import shutil
 import tempfile
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
@@ -551,13 +553,7 @@ def write_results(
         The files written.
     """
     folder = check_output_dir(folder, overwrite=overwrite, extra_files=extra_files)
-    parent = folder.parent
-    parent.mkdir(parents=True, exist_ok=True)
-    tmp = Path(tempfile.mkdtemp(prefix=f".{folder.name}.", suffix=".tmp", dir=parent))
-    umask = os.umask(0o022)
-    os.umask(umask)
-    os.chmod(tmp, 0o777 & ~umask)  # mkdtemp makes it private; the results are not
-    try:
+    with staged_folder(folder) as tmp:
         for name in ("blocks", "interfaces", "springs", "bolts"):
             _write_csv(tmp / f"{name}.csv", tables.get(name, []), _COLUMNS[name], units)
         doc = dict(document)
@@ -572,6 +568,24 @@ def write_results(
             fh.write("\n")
         if write_extra is not None:
             write_extra(tmp)
+    return [folder / name for name in (*RESULT_FILES, *extra_files)]
+
+
+@contextmanager
+def staged_folder(folder: Path) -> Iterator[Path]:
+    """A temporary folder beside ``folder`` to write into; when the block ends
+    without error its files are moved into ``folder`` (the folder itself is
+    renamed into place when it did not exist), else it is removed: the
+    results appear all or nothing, and files already in ``folder`` that were
+    not written again are left as they are."""
+    parent = folder.parent
+    parent.mkdir(parents=True, exist_ok=True)
+    tmp: Path | None = Path(tempfile.mkdtemp(prefix=f".{folder.name}.", suffix=".tmp", dir=parent))
+    umask = os.umask(0o022)
+    os.umask(umask)
+    os.chmod(tmp, 0o777 & ~umask)  # mkdtemp makes it private; the results are not
+    try:
+        yield tmp
         if not folder.exists():
             try:
                 os.rename(tmp, folder)
@@ -579,9 +593,8 @@ def write_results(
             except OSError:  # created meanwhile: fall back to moving file by file
                 folder.mkdir(exist_ok=True)
         if tmp is not None:
-            for name in (*RESULT_FILES, *extra_files):
-                os.replace(tmp / name, folder / name)
+            for path in sorted(tmp.iterdir()):
+                os.replace(path, folder / path.name)
     finally:
         if tmp is not None:
             shutil.rmtree(tmp, ignore_errors=True)
-    return [folder / name for name in (*RESULT_FILES, *extra_files)]

@@ -231,7 +231,7 @@ def _check_destination(model: Path, *more: Path) -> None:
             _WRITES.get(command, ()),
             overwrite=overwrite,
             inputs=[model, *more],
-            temp_beside=command in ("run", "fos"),
+            temp_beside=command in ("run", "fos", "stabilise"),
             refuse_existing=command == "stabilise",
         )
     if params.get("out_file") is not None:
