@@ -251,3 +251,23 @@ def test_toppling_cannot_be_stabilised_by_removal_but_by_a_toe_support(toppling_
     need = max(topple / base_point, slide)
     assert sup.angle == pytest.approx(180.0 - 15.0)  # up the base, as P0
     assert abs(found.force - need) / need < 0.05
+
+
+def test_copy_example_never_writes_through_a_link(tmp_path):
+    """``copy_example(..., overwrite=True)`` replaces a link in the folder by the
+    copy; the file the link pointed to (the user's) is left as it was."""
+    from rockdem.examples import copy_example
+
+    mine = tmp_path / "my-notes.txt"
+    mine.write_text("mine\n")
+    folder = tmp_path / "copies"
+    folder.mkdir()
+    link = folder / example_path("toppling").name
+    link.symlink_to(mine)
+    with pytest.raises(rd.InputError, match="already exists"):
+        copy_example("toppling", folder)
+    copied = copy_example("toppling", folder, overwrite=True)
+    assert mine.read_text() == "mine\n"
+    assert not copied.is_symlink()
+    assert copied.read_bytes() == example_path("toppling").read_bytes()
+    assert sorted(p.name for p in folder.iterdir()) == [copied.name]

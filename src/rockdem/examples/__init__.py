@@ -8,7 +8,9 @@ True
 
 from __future__ import annotations
 
+import os
 import shutil
+import tempfile
 from importlib import resources
 from pathlib import Path
 
@@ -72,8 +74,22 @@ def copy_example(name: str, folder: str | Path, *, overwrite: bool = False) -> P
     if folder.exists() and not folder.is_dir():
         raise InputError(str(folder), "is not a folder", "give a folder to copy into")
     target = folder / src.name
-    if target.exists() and not overwrite:
+    if target.is_dir():
+        raise InputError(str(target), "is a folder", "copy into another folder")
+    if os.path.lexists(target) and not overwrite:  # (a link too, even a broken one)
         raise InputError(str(target), "already exists", "use --overwrite to replace it")
     folder.mkdir(parents=True, exist_ok=True)
-    shutil.copyfile(src, target)
+    # a complete copy beside it, then moved into place: replaces a link itself,
+    # never the file it points to
+    fd, tmp = tempfile.mkstemp(prefix=f".{src.stem}.", suffix=src.suffix, dir=folder)
+    os.close(fd)
+    try:
+        shutil.copyfile(src, tmp)
+        mask = os.umask(0o022)
+        os.umask(mask)
+        os.chmod(tmp, 0o666 & ~mask)
+        os.replace(tmp, target)
+    finally:
+        if os.path.lexists(tmp):
+            os.unlink(tmp)
     return target
