@@ -36,6 +36,24 @@ def test_block_on_a_plane_settles_below_and_slides_above_the_planar_limit(dip, p
     assert np.degrees(np.arctan2(-uy, ux)) == pytest.approx(dip, abs=1.0)
 
 
+@pytest.mark.parametrize("fraction, status", [(0.8, "equilibrium"), (1.2, "mechanism")])
+def test_dense_products_on_small_models_give_the_sparse_run(monkeypatch, fraction, status):
+    """Models of a few blocks relax with dense products (rockdem.relaxation.
+    DENSE_ENTRIES); the two-block wedge (Kovari & Fritz 1975, the seed paper's
+    section 5) gives the same verdict and, in equilibrium, the same displacements
+    either way, below and above its closed-form factor of safety."""
+    from rockdem import relaxation
+
+    model = V.two_block_wedge(35, 30)
+    exact = V.wedge_fos(200, 75, 37, 27, 35, 30, 35)
+    _, dense = _run(model, fraction * exact)
+    monkeypatch.setattr(relaxation, "DENSE_ENTRIES", 0)
+    _, sparse = _run(model, fraction * exact)
+    assert dense.status == sparse.status == status
+    if status == "equilibrium":
+        assert np.abs(dense.q - sparse.q).max() <= 1e-6 * np.abs(sparse.q).max()
+
+
 def test_a_mechanism_is_known_by_its_acceleration_alone(monkeypatch):
     """On large models a run's motion stays below the elastic response although
     the blocks keep accelerating: that alone marks the mechanism.  Block on a

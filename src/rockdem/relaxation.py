@@ -74,6 +74,10 @@ DECAYING = 0.5
 #: (60 dof: 20 segments; 3,000 dof: 8; 30,000 dof: 1)
 EXTENSIONS = 20
 EXTEND_WORK = 1e8
+#: operators with at most this many entries (dense) are multiplied as dense
+#: arrays: a sparse product costs ~8 us of dispatch alone, most of a step on
+#: a model of a few blocks, which may take tens of thousands of steps
+DENSE_ENTRIES = 20_000
 
 
 @dataclass(frozen=True)
@@ -132,6 +136,8 @@ def relax(
     strengths = strength(springs, state, factor, system.model.settings.reduce_tensile)
 
     B, BtW = asm.operator, asm.weighted_transpose
+    if B.shape[0] * B.shape[1] <= DENSE_ENTRIES:  # a few blocks: dense products
+        B, BtW = B.toarray(), BtW.toarray()
     p = np.empty((springs.n_springs, 2))  # spring forces, written in place each step
 
     def unbalanced(q_):
