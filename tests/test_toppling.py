@@ -267,15 +267,19 @@ def test_the_search_does_not_stop_at_a_newton_stall(grow):
 
 
 def test_steep_face_columns_match_goodman_and_bray():
-    """The columns with a 70, 72 and 75 degree face: within 3% of Goodman &
-    Bray (measured 0.474 / 0.4308 / 0.374 against 0.4736 / 0.4310 / 0.3743).
+    """The columns with a 70, 72, 74 and 75 degree face: within 3% of Goodman &
+    Bray (measured 0.474 / 0.4308 / 0.3923 / 0.374 against 0.4736 / 0.4310 /
+    0.3924 / 0.3743).
 
     Path-sensitive, so watched: these verdicts were wrong by 17-33% at the
     last stop (the search stopped at a Newton stall and took the relaxation
     beyond it for the mechanism) and moved with round-off and with a weaker
     relaxation motion test (1x elastic: 70 degrees gave 0.319).  72 degrees
     came right when a from-scratch release that cannot reach zero at F
-    resumes at F/2 from its last released state instead of starting again."""
-    for face in (70.0, 72.0, 75.0):
+    resumes at F/2 from its last released state instead of starting again;
+    74 degrees (0.316, -20%, "undecided") when a confirmation run that is
+    undecided beyond the stall, like one that finds equilibrium there, sends
+    the search on from where that run ended."""
+    for face in (70.0, 72.0, 74.0, 75.0):
         model, le = columns(face)
         assert rd.factor_of_safety(model).value == pytest.approx(le, rel=0.03), face

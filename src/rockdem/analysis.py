@@ -33,7 +33,8 @@ MAX_CASCADE = 100
 #: a failed load step is retried in up to this many equal sub-steps (halving)
 MAX_SUBSTEPS = 8
 #: times a factor-of-safety search goes on past a limit that dynamic
-#: relaxation showed to be a stall of Newton's method (equilibrium beyond it)
+#: relaxation did not confirm (equilibrium beyond it: a stall of Newton's
+#: method; or undecided: the search tries Newton from where the run ended)
 RESTARTS = 3
 
 
@@ -407,8 +408,9 @@ def factor_of_safety(
             break
         hi_an, trials = prove_failed_trial(system, hi_an, lo_an.state, hi, trials)
         hi_an, trials, run, beyond = confirm_failed_trial(system, hi_an, lo_an, hi, trials)
-        if run.status == "equilibrium" and not hi_an.evidence.certified and restarts < RESTARTS:
-            # equilibrium beyond the limit: Newton had stalled; search on from there
+        if run.status != "mechanism" and not hi_an.evidence.certified and restarts < RESTARTS:
+            # equilibrium beyond the limit (Newton had stalled), or no verdict there
+            # (a stall is no verdict either): search on from where the run ended
             restarts += 1
             stage += 1
             b, _ = _continue(system, lo_an, beyond, stage, q0=run.q, base_factor=beyond)
