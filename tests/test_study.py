@@ -367,6 +367,35 @@ def test_a_folder_of_another_study_is_refused(tmp_path):
         )
 
 
+@pytest.mark.parametrize("overwrite", [False, True])
+def test_a_study_never_writes_over_its_own_model_file(tmp_path, overwrite):
+    """A worst sample's file studied into the folder it came from (or a model
+    named like a result file there) is refused, even with --overwrite."""
+    spec = normal_phi(samples=3, compute="verdict")
+    for name in ("worst/sample-000000.yaml", "summary.json"):
+        folder = tmp_path / name.replace("/", "-")
+        (folder / "worst").mkdir(parents=True)
+        model = write_model(folder, spec, name)
+        before = model.read_bytes()
+        flag = ["--overwrite"] if overwrite else []
+        r = invoke("study", model, "--out", folder, "--workers", 0, "--quiet", *flag)
+        refused(r, "would write over its input", "another folder")
+        assert model.read_bytes() == before
+
+
+def test_a_fresh_folder_with_the_users_files_is_refused(tmp_path):
+    """Not a study's folder (no study.json) but holding a file the study would
+    write (a picture, a worst sample): refused without --overwrite."""
+    model = write_model(tmp_path, normal_phi(samples=3, compute="verdict"))
+    for mine in ("sensitivity.png", "fs-distribution.png", "worst/sample-000002.yaml"):
+        folder = tmp_path / f"out-{mine.replace('/', '-')}"
+        (folder / "worst").mkdir(parents=True)
+        (folder / mine).write_text("mine\n")
+        r = invoke("study", model, "--out", folder, "--workers", 0, "--quiet")
+        refused(r, f"holds {mine}", "--overwrite")
+        assert (folder / mine).read_text() == "mine\n"
+
+
 # ---------------------------------------------------------------- bad input
 BAD = [
     (

@@ -126,6 +126,7 @@ def study(
 
             result = run_study(
                 plan,
+                spec,
                 client=scheduler,
                 out=out_dir,
                 workers=workers,

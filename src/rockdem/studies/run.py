@@ -419,6 +419,11 @@ def study(
         raise InputError("workers", "is for the local cluster", "give workers or a client")
     plan = model if isinstance(model, Plan) else prepare(model, spec, max_blocks=max_blocks)
     folder = Path(out) if out is not None else None
+    if folder is not None:
+        from .store import check_inputs_outside
+
+        spec_file = spec if isinstance(spec, str | os.PathLike) else None
+        check_inputs_outside(folder, [plan.source, spec_file])
     store = Store(plan.names, folder, plan.manifest(), overwrite)
     total = len(plan.values)
     resumed = len(store.done)

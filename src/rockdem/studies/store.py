@@ -44,6 +44,37 @@ VOLATILE = ("seconds", "worker")
 #: Shortest interval between rewrites of samples.parquet, in seconds.
 PARQUET_EVERY = 2.0
 FILES = ("study.json", "samples.csv", "samples.parquet", "summary.json")
+#: the other files a study writes into its folder (pictures, report, worst samples)
+WRITTEN = ("sweep.png", "fs-distribution.png", "sensitivity.png", "report.html")
+WORST = "worst/sample-*.yaml"
+
+
+def check_inputs_outside(folder: Path, inputs: list) -> None:
+    """Refuse a study folder where a result would be written over an input
+    (the model file, the spec file): a worst sample's file copied back and
+    studied into the same folder, say.  Even with ``--overwrite``."""
+    folder = Path(folder)
+    for source in inputs:
+        if source is None or not os.path.isfile(source):
+            continue
+        here = Path(os.path.realpath(source))
+        top = Path(os.path.realpath(folder))
+        worst = here.parent == top / "worst" and here.match("sample-*.yaml")
+        if (here.parent == top and here.name in (*FILES, *WRITTEN)) or worst:
+            raise InputError(
+                f"--out {folder}",
+                f"the study would write over its input {source}",
+                "copy the file out of the folder, or write the study into another folder",
+            )
+
+
+def clashing_file(folder: Path) -> str | None:
+    """The first file of a study's results in ``folder`` (None if none)."""
+    for name in (*FILES, *WRITTEN):
+        if os.path.lexists(folder / name):
+            return name
+    worst = sorted(folder.glob(WORST))
+    return str(worst[0].relative_to(folder)) if worst else None
 
 
 def columns(names: list[str]) -> list[str]:
@@ -115,12 +146,12 @@ class Store:
             if csv_path.exists():
                 self._read(csv_path)
         elif not info.exists() and not overwrite:
-            clash = [n for n in FILES if (folder / n).exists()]
+            clash = clashing_file(folder)
             if clash:
                 raise InputError(
                     f"--out {folder}",
-                    f"holds {clash[0]} but no study.json",
-                    "give another folder, or --overwrite",
+                    f"holds {clash} but no study.json (not a study's folder)",
+                    "give another folder, or --overwrite to replace it",
                 )
         if overwrite:
             for name in FILES:
