@@ -187,3 +187,29 @@ def test_pictures_one_per_trial(tmp_path):
     files = save_pictures(s, tmp_path)
     assert [f.name for f in files] == [f"trial-{t.number:02d}.png" for t in s.trials]
     assert all(f.stat().st_size > 10_000 for f in files)
+
+
+def test_a_factor_only_known_to_exceed_the_search_does_not_meet_a_higher_target():
+    """A block on a plane with FS = tan 45 / tan 3.18 = 18 (Hoek & Bray 1981,
+    ch. 7): the design rating searches up to F = 20 and stops at '> 13.3' or
+    so; that meets a target of 10, and is no evidence for a target of 20."""
+    from rockdem.stabilisation.removal import meets, rate
+    from rockdem.verification import block_on_plane
+
+    dip = np.degrees(np.arctan(1 / 18))
+    fos = rate(block_on_plane(dip, rd.Joint(normal_stiffness=1e6, friction_angle=45)))
+    assert fos.mode == "no-failure" and fos.bracket[0] < 18
+    assert meets(fos, 10.0)
+    assert not meets(fos, 20.0)
+
+
+def test_a_slope_that_never_fails_needs_no_support_and_says_so():
+    """Nothing fails up to the search's largest factor: the support row says no
+    force was sized (it was an error, exit 2, before)."""
+    from rockdem.verification import block_on_plane
+
+    model = block_on_plane(np.degrees(np.arctan(1 / 18)),
+                           rd.Joint(normal_stiffness=1e6, friction_angle=45))
+    rows = {m.kind: m for m in compare_measures(model, 1.3).measures}
+    assert rows["none"].reached and rows["support"].reached
+    assert rows["support"].note.startswith("none sized: no failure mechanism")

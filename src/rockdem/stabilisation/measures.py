@@ -223,6 +223,11 @@ def compare_measures(
             Measure("berm", "berm (new profile)", area, None, fb, meets(fb, target_fos), "", mb)
         )
     search = None
+    if support and support_at is None and not mechanism_ids(base):
+        support = False  # nothing fails: there is no mechanism to hold
+        note = f"none sized: no failure mechanism up to F = {base.bracket[0]:.3g}"
+        held = meets(base, target_fos)
+        rows.append(Measure("support", "support force", 0.0, None, None, held, note, None))
     if support:
         with _progress.stage("support force"):
             search = support_force(

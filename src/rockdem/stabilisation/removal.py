@@ -31,9 +31,11 @@ def rate(model: Model, *, width: float = 0.01, largest: float = 20.0) -> FactorO
 
 
 def meets(fos: FactorOfSafety, target: float) -> bool:
-    """True when the design is stable at the target factor (the bracket's stable end)."""
+    """True when the design is known stable at the target factor: the bracket's
+    stable end reaches it (also where no trial failed: the search stops below
+    its largest factor, ``> 17.1`` of 20, say, does not meet a target of 20)."""
     if fos.mode == "no-failure":
-        return True
+        return fos.bracket[0] >= target
     return fos.value is not None and fos.bracket[0] >= target
 
 
