@@ -412,6 +412,47 @@ def test_check_refuses_a_zero_length_joint_line(tmp_path):
     assert_refused(check(tmp_path, text), "joint_lines[0]", "zero length")
 
 
+def test_a_generated_slope_without_a_fixed_boundary_is_refused(tmp_path):
+    """The free blocks of a slope with `boundary: []` reach no fixed block
+    (SuperLU factorised the singular stiffness: `check` called it valid)."""
+    text = SLOPE.replace("  depth: 3", "  depth: 3\n  boundary: []")
+    assert_refused(check(tmp_path, text), "slope:", "held by nothing: no block is fixed")
+
+
+@pytest.mark.parametrize(
+    "extra, key",
+    [
+        ("loads: {points: [{at: [0, -0.5], force: [100, 0]}]}", "loads.points[0]"),
+        ("supports: [{at: [-5, -0.5], force: 100, angle: 0}]", "supports[0]"),
+    ],
+)
+def test_a_load_or_support_on_the_fixed_ground_is_refused(tmp_path, extra, key):
+    """A force on a fixed block carries nothing: it was dropped silently."""
+    assert_refused(check(tmp_path, BOX + extra + "\n"), key, "acts on a fixed block")
+
+
+@pytest.mark.parametrize("text", [
+    BOX.replace("unit_weight: 25", "unit_weight: 0"),
+    BOX.replace("units: kN, m, kPa", "units: kN, m, kPa\nloads: {gravity: false}"),
+])
+def test_a_model_without_load_is_refused(tmp_path, text):
+    """Nothing loads the free blocks: a factor of safety '> 86.5' was printed."""
+    assert_refused(check(tmp_path, text), "free blocks carry no load", "unit weight")
+
+
+@pytest.mark.parametrize(
+    "joint, key",
+    [
+        ("cohesion: 10, residual_cohesion: 1000", "residual_cohesion"),
+        ("residual_friction_angle: 60", "residual_friction_angle"),
+        ("tensile_strength: 5, residual_tensile_strength: 50", "residual_tensile_strength"),
+    ],
+)
+def test_a_residual_strength_above_the_peak_is_refused(tmp_path, joint, key):
+    text = BOX.replace("friction_angle: 30}", f"friction_angle: 30, {joint}}}")
+    assert_refused(check(tmp_path, text), f"joints.bedding.{key}", "above the peak")
+
+
 def test_a_model_without_a_fixed_block_says_what_nothing_holds(tmp_path):
     line = assert_refused(
         check(tmp_path, BOX.replace("fixed: true", "material: rock")),

@@ -97,6 +97,18 @@ class Joint:
         check_number(
             where, "residual_friction_angle", self.residual_friction_angle, lo=0.0, hi=90.0
         )
+        for residual, peak in (
+            ("residual_cohesion", "cohesion"),
+            ("residual_friction_angle", "friction_angle"),
+            ("residual_tensile_strength", "tensile_strength"),
+        ):  # failure never strengthens a joint
+            if getattr(self, residual) > getattr(self, peak):
+                raise InputError(
+                    f"{where} {residual}",
+                    f"{getattr(self, residual):g} is above the peak {peak} "
+                    f"{getattr(self, peak):g}",
+                    f"give at most {getattr(self, peak):g} (null keeps the peak)",
+                )
 
     @property
     def ductile(self) -> Joint:

@@ -30,7 +30,7 @@ def block_loads(blocks: Blocks, loads: Loads, *, support_scale: float = 1.0) -> 
         force = np.array([(p.fx, p.fy) for p in loads.points], dtype=float)
         scale = np.array([support_scale if p.support else 1.0 for p in loads.points])
         names = [p.name or f"point load {i}" for i, p in enumerate(loads.points)]
-        _add_forces(f, blocks, xy, force * scale[:, None], names)
+        _add_forces(f, blocks, xy, force * scale[:, None], names, on_fixed=False)
     if loads.lines:
         pieces_xy, pieces_f, names = _split_line_loads(blocks, loads)
         if len(pieces_xy):
@@ -38,8 +38,11 @@ def block_loads(blocks: Blocks, loads: Loads, *, support_scale: float = 1.0) -> 
     return f
 
 
-def _locate(blocks: Blocks, xy: np.ndarray, direction: np.ndarray, names) -> np.ndarray:
-    """The block each force at ``xy`` pushes into."""
+def _locate(
+    blocks: Blocks, xy: np.ndarray, direction: np.ndarray, names, on_fixed: bool = True
+) -> np.ndarray:
+    """The block each force at ``xy`` pushes into (``on_fixed=False``: a force
+    on a fixed block, which would carry nothing, is an error)."""
     polys = blocks.polygons()
     tree = shapely.STRtree(polys)
     unit = direction / np.maximum(np.hypot(*direction.T), 1e-300)[:, None]
@@ -55,11 +58,19 @@ def _locate(blocks: Blocks, xy: np.ndarray, direction: np.ndarray, names) -> np.
             f"at ({xy[k, 0]:g}, {xy[k, 1]:g}) does not act on any block",
             "place it on a block boundary, pointing into the block",
         )
+    if not on_fixed and blocks.fixed[owner].any():
+        k = int(np.flatnonzero(blocks.fixed[owner])[0])
+        raise InputError(
+            names[k],
+            f"at ({xy[k, 0]:g}, {xy[k, 1]:g}) acts on a fixed block "
+            f"(block {blocks.ids[owner[k]]}), where it would hold or push nothing",
+            "place it on a free block's boundary, pointing into that block",
+        )
     return owner
 
 
-def _add_forces(f, blocks, xy, force, names) -> None:
-    owner = _locate(blocks, xy, force, names)
+def _add_forces(f, blocks, xy, force, names, on_fixed: bool = True) -> None:
+    owner = _locate(blocks, xy, force, names, on_fixed)
     r = xy - blocks.centroid[owner]
     moment = r[:, 0] * force[:, 1] - r[:, 1] * force[:, 0]
     np.add.at(f, (owner, 0), force[:, 0])

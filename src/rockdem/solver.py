@@ -115,6 +115,9 @@ def build_system(model: Model, f_block: np.ndarray | None = None) -> System:
         lines=model.joint_lines,
         line_joint=model.line_joint,
     )
+    # every free block must reach a fixed one (a factorisation of the singular
+    # stiffness need not fail: SuperLU factorised 59 blocks and no ground)
+    check_held(blocks, faces)
     s = model.settings
     springs = place_springs(faces, model.joints, s.quadrature, s.points_per_interface)
     asm = build_assembly(blocks, faces, springs)
@@ -130,6 +133,13 @@ def build_system(model: Model, f_block: np.ndarray | None = None) -> System:
     free = ~blocks.fixed
     f_ext = np.zeros(asm.n_dof)
     f_ext[asm.dof[free].ravel()] = f_block[free].ravel()
+    if asm.n_dof and not np.any(f_ext) and bolts is None:
+        raise InputError(
+            "the free blocks",
+            "carry no load (no unit weight, or gravity off, and no other load): there is "
+            "nothing to analyse",
+            "give the blocks a unit weight, or apply a load",
+        )
     lu0 = None
     elastic = 1.0
     if asm.n_dof:
