@@ -194,6 +194,32 @@ def test_two_block_wedge_is_eq7():
     assert r.fos == wedge_fos(200, 75, 37, 27, 35, 30, 35)
 
 
+@pytest.mark.parametrize(
+    "changes, fragment",
+    [
+        ({"passive_dip": -60}, "passive_dip"),  # Eq. 7's denominator vanishes: FS -0.33
+        ({"passive_dip": -30}, "passive_dip"),  # brentq found no sign change: exit 1
+        ({"passive_dip": 0}, "passive_dip"),
+        ({"passive_dip": 40}, "passive_dip"),  # steeper than the active plane
+        ({"active_friction": 89, "passive_friction": 89, "joint_friction": 89}, "between 0.2"),
+    ],
+)
+def test_a_wedge_outside_eq7s_range_is_an_input_error(changes, fragment):
+    """Eq. 7 (the seed paper's two-block wedge) holds for a passive plane
+    dipping out of the slope, flatter than the active one."""
+    case = dict(
+        active_weight=200,
+        passive_weight=75,
+        active_dip=37,
+        passive_dip=27,
+        active_friction=35,
+        passive_friction=30,
+        joint_friction=35,
+    )
+    with pytest.raises(rd.InputError, match=fragment):
+        wedge_le(**{**case, **changes})
+
+
 # ------------------------------------------------ Sarma on the DEM's mechanism
 def _dem_and_sarma(model, width=0.002):
     fos = rd.factor_of_safety(model, width=width)

@@ -453,7 +453,10 @@ def two_block_wedge(
     w1 = check_number(where, "active_weight", active_weight, lo=0.0, open_lo=True)
     w2 = check_number(where, "passive_weight", passive_weight, lo=0.0)
     d1 = check_number(where, "active_dip", active_dip, lo=0.0, hi=90.0, open_lo=True)
-    d2 = check_number(where, "passive_dip", passive_dip, lo=-90.0, hi=d1)
+    # Eq. 7 and its factor of safety hold for a passive plane dipping out of
+    # the slope, flatter than the active one (a negative dip divides by
+    # tan(d2) in the single-block factor and makes Eq. 7's denominator vanish)
+    d2 = check_number(where, "passive_dip", passive_dip, lo=0.0, hi=d1, open_lo=True)
     p = [
         check_number(where, key, value, lo=0.0, hi=90.0)
         for key, value in (
@@ -462,6 +465,13 @@ def two_block_wedge(
             ("joint_friction", joint_friction),
         )
     ]
-    return TwoBlockWedge(
-        float(wedge_thrust(w1, w2, d1, d2, *p)), float(wedge_fos(w1, w2, d1, d2, *p))
-    )
+    try:
+        fos = float(wedge_fos(w1, w2, d1, d2, *p))
+    except ValueError:  # brentq: the thrust does not change sign on [0.2, 5]
+        raise InputError(
+            where,
+            "no factor of safety between 0.2 and 5 makes Eq. 7's thrust zero",
+            "check the dips and friction angles (a wedge so far from its limit is rated "
+            "better by `rockdem fos`)",
+        ) from None
+    return TwoBlockWedge(float(wedge_thrust(w1, w2, d1, d2, *p)), fos)
