@@ -589,3 +589,56 @@ def test_bounded_reading_keeps_normal_files_working(tmp_path):
     r = rockdem("check", "m.json", cwd=tmp_path)
     assert r.returncode == 0, r.stderr
     assert np.isclose(float(r.stdout.split("free weight ")[1].split()[0]), 100)
+
+
+@pytest.mark.parametrize(
+    "old, new, fragment",
+    [
+        ("bedding: {", '"bed\\nding": {', "'bed\\nding' holds a control character"),
+        ("units: kN", 'name: "\\e[2J\\e[31mHACKED"\nunits: kN', "name: the name"),
+        ("units: kN", "units: kN \x07", "not valid YAML: character #x0007"),
+    ],
+)
+def test_control_characters_in_keys_names_and_text_are_refused(tmp_path, old, new, fragment):
+    """A line break in a joint name broke the DXF export after the analysis;
+    an escape in the model's name drove the terminal; a BEL byte gave a
+    two-line YAML message with no line."""
+    line = assert_refused(check(tmp_path, BOX.replace(old, new, 1)), fragment)
+    assert "\x1b" not in line
+
+
+@pytest.mark.parametrize(
+    "option, value, fragment",
+    [
+        ("--dpi", "20000", "out of range 1 to 1200"),
+        ("--magnification", "inf", "positive and finite"),
+    ],
+)
+def test_plot_options_out_of_range_are_input_errors(tmp_path, option, value, fragment):
+    """--dpi 20000 ran out of memory (exit 1); --magnification inf hit a math domain error."""
+    what = "mechanism" if option == "--magnification" else "model"
+    r = inproc("plot", "-e", "wedge-verification", "-w", what, "-o", "p.png", option, value,
+               cwd=tmp_path)
+    assert_refused(r, option, fragment)
+    assert not (tmp_path / "p.png").exists()
+
+
+@pytest.mark.parametrize("address", ["not a url", "http://localhost:80"])
+def test_a_scheduler_that_is_no_address_is_refused_before_anything_is_written(tmp_path, address):
+    (tmp_path / "spec.yaml").write_text(
+        "study: {samples: 2, inputs: {joints.lower.friction_angle: "
+        "{distribution: normal, mean: 30, sd: 2}}}\n"
+    )
+    r = inproc("study", "-e", "wedge-verification", "--spec", "spec.yaml", "--out", "o",
+               "--scheduler", address, cwd=tmp_path)
+    assert_refused(r, "--scheduler", "not a dask scheduler address")
+    assert not (tmp_path / "o").exists()
+
+
+def test_a_destination_on_a_read_only_file_system_is_refused_before_work(tmp_path):
+    """/proc is read-only even for root: `example copy` into it (exit 1,
+    "the analysis failed: OSError") is now an input error before copying."""
+    if not os.path.isdir("/proc/1") or os.access("/proc/1", os.W_OK):
+        pytest.skip("no read-only /proc here")
+    r = inproc("example", "copy", "toppling", "/proc/1/x", cwd=tmp_path)
+    assert_refused(r, "/proc/1", "not writable")

@@ -156,6 +156,24 @@ def _guard(debug: bool) -> Iterator[None]:
     except KeyboardInterrupt:
         err.print("interrupted")
         raise typer.Exit(130) from None
+    except OSError as exc:  # the file system refused while writing: full, read-only
+        if debug:
+            raise
+        place = f"{exc.filename}: " if exc.filename else ""
+        reason = exc.strerror or str(exc)
+        err.print(
+            f"error: {escape(place)}a file could not be written or read ({escape(reason)}); "
+            "free some space, or give a folder you may write into"
+        )
+        raise typer.Exit(EXIT_FAILED) from None
+    except MemoryError as exc:
+        if debug:
+            raise
+        err.print(
+            f"error: out of memory (MemoryError: {escape(str(exc))}); make the model "
+            "smaller (fewer blocks)"
+        )
+        raise typer.Exit(EXIT_FAILED) from None
     except Exception as exc:
         if debug:
             raise

@@ -203,6 +203,10 @@ def report(
         typer.echo(str(target))
 
 
+#: the finest resolution drawn (a page-wide figure at 1,200 dpi is ~10,000 pixels wide)
+MAX_DPI = 1200
+
+
 def _plot_options(
     what: str,
     out_file: Path,
@@ -253,14 +257,18 @@ def _plot_options(
         raise InputError(
             "--magnification", "applies to --what deformed or mechanism only", "leave it out"
         )
-    if magnification is not None and not magnification > 0:
+    if magnification is not None and not 0 < magnification < 1e12:
         raise InputError(
-            f"--magnification {magnification:g}", "must be positive", "give a factor such as 100"
+            f"--magnification {magnification:g}",
+            "must be positive and finite",
+            "give a factor such as 100",
         )
     if ids and what not in ("model", "failure"):
         raise InputError("--ids", "applies to --what model or failure only", "leave it out")
-    if dpi < 1:
-        raise InputError(f"--dpi {dpi}", "must be positive", "give for example 150")
+    if not 1 <= dpi <= MAX_DPI:
+        raise InputError(
+            f"--dpi {dpi}", f"is out of range 1 to {MAX_DPI}", "give for example 150 (300 to print)"
+        )
 
 
 def plot(

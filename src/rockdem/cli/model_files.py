@@ -84,6 +84,9 @@ def example_copy(
             )
         if target.is_dir():
             raise InputError(str(target), "is a folder", "remove it, or copy into another folder")
+        from .files import _check_out_folder
+
+        _check_out_folder(folder, (), overwrite=overwrite, inputs=[], option="FOLDER")
         target = copy_example(name, folder, overwrite=overwrite)
         out.print(f"copied {name} to {escape(str(target))}")
         out.print(f"next: rockdem check {escape(str(target))}")

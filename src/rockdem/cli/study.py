@@ -107,6 +107,9 @@ def study(
                 "--workers", "is for the local cluster", "give --workers or --scheduler, not both"
             )
         path = _model_path(model, example)
+        from .files import _check_out_folder
+
+        _check_out_folder(out_dir, (), overwrite=overwrite, inputs=[path])  # writable?
         plan = prepare(path, spec, max_blocks=_ROOT["max_blocks"])
         if workers != 0:
             from ..studies.run import import_dask

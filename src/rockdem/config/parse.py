@@ -277,6 +277,38 @@ def _check_depth(data: Any, source: str) -> None:
             todo.extend((v, depth + 1) for v in values)
 
 
+def _check_keys(data: dict, source: str) -> None:
+    """Refuse control characters in every key and in the model's name."""
+    todo: list[Any] = [data]
+    while todo:
+        item = todo.pop()
+        if isinstance(item, dict):
+            for key in item:
+                _check_name(key, source)
+            todo.extend(item.values())
+        elif isinstance(item, list):
+            todo.extend(item)
+    if isinstance(data.get("name"), str):
+        _check_name(data["name"], source, "name")
+
+
+#: control characters (line breaks, escapes): never in a key or a name, which
+#: are printed in tables, CSV headings and DXF layers (an escape would drive
+#: the terminal)
+_CONTROL = re.compile(r"[\x00-\x1f\x7f-\x9f\u2028\u2029]")
+
+
+def _check_name(key: Any, source: str, where: str | None = None) -> None:
+    if isinstance(key, str) and _CONTROL.search(key):
+        raise ModelFileError(
+            source,
+            where or "",
+            f"the {'name' if where else 'key'} {key!r} holds a control character "
+            "(a line break, tab or escape)",
+            "use letters, digits, spaces, '-' and '_'",
+        )
+
+
 def parse_document(text: str, *, fmt: str = "yaml", source: str = "<string>") -> tuple[dict, Any]:
     """Parse the text of a model file (see :func:`read_document`)."""
     nodes = None
@@ -319,8 +351,20 @@ def parse_document(text: str, *, fmt: str = "yaml", source: str = "<string>") ->
                 "check the indentation, colons and brackets",
                 line,
             ) from None
+        except yaml.reader.ReaderError as exc:  # a character YAML does not allow
+            line = text[: exc.position].count("\n") + 1
+            raise ModelFileError(
+                source,
+                "",
+                f"not valid YAML: character #x{exc.character:04x} is not allowed "
+                "(a control character)",
+                "delete it (retype the line)",
+                line,
+            ) from None
         except yaml.YAMLError as exc:
-            raise ModelFileError(source, "", f"not valid YAML: {exc}", "fix the syntax") from None
+            one_line = " ".join(str(exc).split())
+            problem = f"not valid YAML: {one_line}"
+            raise ModelFileError(source, "", problem, "fix the syntax") from None
     if data is None:
         raise ModelFileError(
             source, "", "the file is empty", "write a model (see `rockdem example list`)"
@@ -333,6 +377,7 @@ def parse_document(text: str, *, fmt: str = "yaml", source: str = "<string>") ->
             "start with keys such as `units:`, `joints:` and `blocks:`",
             1,
         )
+    _check_keys(data, source)
     return data, nodes
 
 

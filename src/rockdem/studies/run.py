@@ -15,6 +15,7 @@ import hashlib
 import json
 import math
 import os
+import re
 import socket
 import time
 from collections.abc import Callable, Iterable
@@ -313,14 +314,24 @@ def import_dask():
     return dd
 
 
+def _check_address(client: str) -> None:
+    if not re.fullmatch(r"(tcp|tls|ucx|ws|wss)://[^\s/:]+:\d{1,5}/?", client):
+        raise InputError(
+            f"--scheduler {client}",
+            "is not a dask scheduler address",
+            "give one such as tcp://host:8786",
+        )
+
+
 def _client(client, workers: int | None, n_tasks: int):
     """(client, things to close): the given client, one connected to an address, or
     a local cluster of ``workers`` processes."""
     dd = import_dask()
     if isinstance(client, str):
+        _check_address(client)
         try:
             c = dd.Client(client, timeout="20s")
-        except (OSError, TimeoutError) as exc:
+        except (OSError, TimeoutError, ValueError, MemoryError) as exc:
             raise InputError(
                 f"--scheduler {client}",
                 f"cannot connect ({type(exc).__name__}: {exc})",
@@ -417,6 +428,8 @@ def study(
         raise InputError("workers", f"{workers!r} is out of range", "give 0 or more")
     if workers is not None and client is not None:
         raise InputError("workers", "is for the local cluster", "give workers or a client")
+    if isinstance(client, str):
+        _check_address(client)  # before any folder is made
     plan = model if isinstance(model, Plan) else prepare(model, spec, max_blocks=max_blocks)
     folder = Path(out) if out is not None else None
     if folder is not None:
