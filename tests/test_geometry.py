@@ -308,6 +308,8 @@ def test_spacing_not_positive(spacing):
         ({"gap": 2}, "joint set 'x' gap"),
         ({"trace_length": 0}, "joint set 'x' trace_length"),
         ({"spacing_sd": -1}, "joint set 'x' spacing_sd"),
+        # 1e9 x the spacing ran `check` for 87 s into a singular matrix
+        ({"spacing_sd": 2.5}, "joint set 'x' spacing_sd"),
         ({"joint": "rock"}, "joint set 'x' joint"),
     ],
 )

@@ -41,6 +41,8 @@ from ..joints import Joint
 __all__ = ["JointSet"]
 
 RESERVED_NAMES = ("bridge", "ground")
+#: largest coefficient of variation of a joint set's spacing (spacing_sd / spacing)
+MAX_SPACING_COV = 2.0
 
 
 @dataclass(frozen=True, eq=False)
@@ -140,6 +142,14 @@ class JointSet:
         for key in ("spacing_sd", "dip_sd"):
             if check_number(where, key, getattr(self, key)) < 0:
                 raise InputError(f"{where} {key}", "is negative", "give a value >= 0")
+        if self.spacing_sd > MAX_SPACING_COV * spacing:
+            raise InputError(
+                f"{where} spacing_sd",
+                f"{self.spacing_sd:g} is more than {MAX_SPACING_COV:g} x the spacing "
+                f"{spacing:g}: the lognormal spacings would cut slivers without end",
+                f"give at most {MAX_SPACING_COV * spacing:g} (field spacings vary by about "
+                "0.5 to 1.5 x their mean)",
+            )
         object.__setattr__(self, "dip", dip)
         object.__setattr__(self, "spacing", spacing)
         # coordinates near underflow break GEOS's robust predicates: snap them to 0
