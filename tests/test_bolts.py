@@ -216,6 +216,8 @@ bolts:
         ("head: [0.5, 1.0]", "bolts[0]:", "is not on the rock"),
         ("capacity: 50", "bolts[0].capacity:", "-5 is out of range"),
         ("angle: 270", "bolts[0].kind:", "use 'bolt' or 'cable'"),
+        # 1e-9 made the bolts 1e9 x stiffer than the joints: "no failure at any factor"
+        ("axial_stiffness: 1.0e+4", "spacing", "far below the size of the blocks"),
     ],
 )
 def test_bad_bolt_in_a_file_is_one_line_and_exit_2(tmp_path, change, where, message):
@@ -228,6 +230,7 @@ def test_bad_bolt_in_a_file_is_one_line_and_exit_2(tmp_path, change, where, mess
         "head: [0.5, 1.0]": "head: [3.0, 4.0]",
         "capacity: 50": "capacity: -5",
         "angle: 270": "angle: 270, kind: rope",
+        "axial_stiffness: 1.0e+4": "axial_stiffness: 1.0e+4, spacing: 1.0e-9",
     }[change]
     path = tmp_path / "m.yaml"
     path.write_text(BOLTED_BOX.replace(change, bad))
