@@ -323,3 +323,16 @@ def test_a_bolt_longer_than_the_model_is_cut_at_the_model():
     short = rd.factor_of_safety(block_with_bolt(30.0))
     long = rd.factor_of_safety(block_with_bolt(30.0, length=1e9))
     assert long.value == pytest.approx(short.value, rel=1e-3)
+
+
+def test_a_row_spacing_that_would_put_millions_of_bolts_on_the_face_is_refused():
+    """stabilise ran for minutes on row_spacing 1e-6 (4.8 million rows)."""
+    from rockdem.config import load_model
+    from rockdem.examples import example_path
+    from rockdem.stabilisation.bolting import MAX_ROWS, face_rows
+
+    model, _ = load_model(example_path("inclined-layers"))
+    free = [int(i) for i in model.blocks.ids[~model.blocks.fixed]]
+    assert 1 <= len(face_rows(model, free, row_spacing=1.0)) <= MAX_ROWS
+    with pytest.raises(rd.InputError, match="row_spacing"):
+        face_rows(model, free, row_spacing=1e-6)

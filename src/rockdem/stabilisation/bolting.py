@@ -72,6 +72,10 @@ class BoltPattern:
         return None if self.spacing is None else len(self.bolts) / self.spacing
 
 
+#: most bolt rows a pattern puts on the face of a mechanism
+MAX_ROWS = 100
+
+
 def face_rows(
     model: Model, ids, *, row_spacing: float | None = None, angle: float = 195.0, n_rows: int = 4
 ):
@@ -112,6 +116,12 @@ def face_rows(
     total = sum(length for *_, length in pieces)
     step = total / n_rows if row_spacing is None else float(row_spacing)
     n = max(1, int(np.floor(total / step + 1e-9)))
+    if n > MAX_ROWS:  # each row is a bolt the analysis carries: keep it a pattern
+        raise InputError(
+            "stabilisation.bolts.row_spacing",
+            f"{step:g} puts {n:,} rows on the {total:.3g} of face to bolt",
+            f"give a row spacing of at least {total / MAX_ROWS:.3g} ({MAX_ROWS} rows)",
+        )
     at = (np.arange(n) + 0.5) * total / n
     e = np.array([np.cos(np.radians(angle)), np.sin(np.radians(angle))])
     reach = 2.0 * b.extent
