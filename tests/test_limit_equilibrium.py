@@ -179,16 +179,20 @@ def test_every_toppling_block_is_in_equilibrium():
 
 
 # ---------------------------------------------------------------------- wedge
+#: the seed paper's two-block wedge (section 5)
+WEDGE_CASE = dict(
+    active_weight=200,
+    passive_weight=75,
+    active_dip=37,
+    passive_dip=27,
+    active_friction=35,
+    passive_friction=30,
+    joint_friction=35,
+)
+
+
 def test_two_block_wedge_is_eq7():
-    r = wedge_le(
-        active_weight=200,
-        passive_weight=75,
-        active_dip=37,
-        passive_dip=27,
-        active_friction=35,
-        passive_friction=30,
-        joint_friction=35,
-    )
+    r = wedge_le(**WEDGE_CASE)
     assert round(r.thrust, 2) == 2.64  # the paper's table (docs/method.md, section 5)
     assert r.thrust == wedge_thrust(200, 75, 37, 27, 35, 30, 35)
     assert r.fos == wedge_fos(200, 75, 37, 27, 35, 30, 35)
@@ -207,17 +211,8 @@ def test_two_block_wedge_is_eq7():
 def test_a_wedge_outside_eq7s_range_is_an_input_error(changes, fragment):
     """Eq. 7 (the seed paper's two-block wedge) holds for a passive plane
     dipping out of the slope, flatter than the active one."""
-    case = dict(
-        active_weight=200,
-        passive_weight=75,
-        active_dip=37,
-        passive_dip=27,
-        active_friction=35,
-        passive_friction=30,
-        joint_friction=35,
-    )
     with pytest.raises(rd.InputError, match=fragment):
-        wedge_le(**{**case, **changes})
+        wedge_le(**{**WEDGE_CASE, **changes})
 
 
 # ------------------------------------------------ Sarma on the DEM's mechanism

@@ -156,32 +156,27 @@ def _guard(debug: bool) -> Iterator[None]:
     except KeyboardInterrupt:
         err.print("interrupted")
         raise typer.Exit(130) from None
-    except OSError as exc:  # the file system refused while writing: full, read-only
-        if debug:
-            raise
-        place = f"{exc.filename}: " if exc.filename else ""
-        reason = exc.strerror or str(exc)
-        err.print(
-            f"error: {escape(place)}a file could not be written or read ({escape(reason)}); "
-            "free some space, or give a folder you may write into"
-        )
-        raise typer.Exit(EXIT_FAILED) from None
-    except MemoryError as exc:
-        if debug:
-            raise
-        err.print(
-            f"error: out of memory (MemoryError: {escape(str(exc))}); make the model "
-            "smaller (fewer blocks)"
-        )
-        raise typer.Exit(EXIT_FAILED) from None
     except Exception as exc:
         if debug:
             raise
-        err.print(
-            f"error: the analysis failed: {type(exc).__name__}: {escape(str(exc))} "
-            "(run again with --debug for the traceback)"
-        )
+        err.print(f"error: {escape(_failure_text(exc))}")
         raise typer.Exit(EXIT_FAILED) from None
+
+
+def _failure_text(exc: Exception) -> str:
+    """One line for an error that is not the input's fault (exit 1)."""
+    if isinstance(exc, OSError):  # the file system refused while writing: full, read-only
+        place = f"{exc.filename}: " if exc.filename else ""
+        return (
+            f"{place}a file could not be written or read ({exc.strerror or exc}); "
+            "free some space, or give a folder you may write into"
+        )
+    if isinstance(exc, MemoryError):
+        return f"out of memory (MemoryError: {exc}); make the model smaller (fewer blocks)"
+    return (
+        f"the analysis failed: {type(exc).__name__}: {exc} "
+        "(run again with --debug for the traceback)"
+    )
 
 
 def _model_path(model: Path | None, example: str | None) -> Path:
