@@ -370,3 +370,32 @@ def test_excavation_removes_whole_blocks_and_small_pieces():
     assert g.blocks.centroid[j, 0] == pytest.approx(8.0)  # the column [7.5, 8.5]
     i = k.blocks.index_of([g.blocks.ids[j]])[0]
     assert k.blocks.area[i] == pytest.approx(0.7 * 10, rel=1e-12)
+
+
+@pytest.mark.parametrize(
+    "dip, shift", [(35.0, (0.0, 0.0)), (0.0, (5e5, 7e6)), (179.99, (0.0, 0.0))]
+)
+def test_edge_pairs_by_direction_give_the_interfaces_of_one_r_tree(dip, shift, monkeypatch):
+    """The interface search groups edges by direction and turns each group
+    level (rockdem.interfaces._edge_pairs); on thin inclined layers (and near
+    the 0 = 180 degree wrap, and at site coordinates) it finds exactly the
+    interfaces that one R-tree query over all edges gives."""
+    from rockdem import interfaces
+
+    profile = Profile.simple(height=6, face_angle=60)
+    sets = [JointSet("bedding", dip, 0.05, J), JointSet("cross", 90.0, 1.5, J, origin=(0.3, 0))]
+    blocks = generate_slope(profile, sets, depth=3).blocks
+    blocks = rd.Blocks.from_polygons(
+        [blocks.outline(k) + shift for k in range(blocks.n_blocks)], fixed=blocks.fixed
+    )
+    grouped = interfaces.find_interfaces(blocks)
+
+    def one_tree(p, q, tol):
+        lines = shapely.linestrings(np.stack([p, q], axis=1))
+        return shapely.STRtree(lines).query(lines, predicate="dwithin", distance=tol)
+
+    monkeypatch.setattr(interfaces, "_edge_pairs", one_tree)
+    ref = interfaces.find_interfaces(blocks)
+    assert grouped.n_interfaces == ref.n_interfaces > blocks.n_blocks
+    for name in ("block_a", "block_b", "start", "end"):
+        assert np.array_equal(getattr(grouped, name), getattr(ref, name)), name

@@ -77,9 +77,7 @@ def find_interfaces(blocks: Blocks) -> Interfaces:
     """
     p, q, owner = blocks.edges()
     tol = blocks.tolerance
-    lines = shapely.linestrings(np.stack([p, q], axis=1))
-    tree = shapely.STRtree(lines)
-    i, j = tree.query(lines, predicate="dwithin", distance=tol)
+    i, j = _edge_pairs(p, q, tol)
     keep = (owner[i] < owner[j]) & ~(blocks.fixed[owner[i]] & blocks.fixed[owner[j]])
     i, j = i[keep], j[keep]
     d_i = q[i] - p[i]
@@ -106,6 +104,42 @@ def find_interfaces(blocks: Blocks) -> Interfaces:
     )
     _check_connected(blocks, faces)
     return faces
+
+
+#: edges whose directions differ by more than this (radians) are searched apart
+DIRECTION_GAP = 1e-3
+
+
+def _edge_pairs(p: np.ndarray, q: np.ndarray, tol: float) -> tuple[np.ndarray, np.ndarray]:
+    """Pairs of edges within ``tol`` of each other that may lie on one line.
+
+    Edges on one line have one direction (to round-off), so the edges are
+    grouped by direction (gaps wider than DIRECTION_GAP split the groups) and
+    each group is turned level before its R-tree query: a long inclined edge's
+    bounding box is then thin, where it would hold hundreds of thin blocks'
+    edges (measured: 5,000 blocks 0.01 m thick, 6.9 s in the query).
+    """
+    d = q - p
+    theta = np.mod(np.arctan2(d[:, 1], d[:, 0]), np.pi)  # the line's direction
+    order = np.argsort(theta)
+    gaps = np.flatnonzero(np.diff(theta[order]) > DIRECTION_GAP)
+    groups = np.split(order, gaps + 1)
+    if len(groups) > 1 and theta[order[0]] + np.pi - theta[order[-1]] <= DIRECTION_GAP:
+        groups[0] = np.concatenate([groups.pop(), groups[0]])  # across 0 = pi
+    centre = 0.5 * (p.min(axis=0) + p.max(axis=0))
+    pairs_i, pairs_j = [], []
+    for g in groups:
+        angle = np.arctan2(np.sin(2 * theta[g]).mean(), np.cos(2 * theta[g]).mean()) / 2
+        c, s_ = np.cos(angle), np.sin(angle)
+        turn = np.array([[c, s_], [-s_, c]])  # by -angle: the group's lines level
+        ends = np.stack([(p[g] - centre) @ turn.T, (q[g] - centre) @ turn.T], axis=1)
+        lines = shapely.linestrings(ends)
+        a, b = shapely.STRtree(lines).query(lines, predicate="dwithin", distance=tol)
+        pairs_i.append(g[a])
+        pairs_j.append(g[b])
+    if not pairs_i:
+        return np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64)
+    return np.concatenate(pairs_i), np.concatenate(pairs_j)
 
 
 def _check_connected(blocks: Blocks, faces: Interfaces) -> None:
