@@ -440,6 +440,12 @@ def test_a_model_without_load_is_refused(tmp_path, text):
     assert_refused(check(tmp_path, text), "free blocks carry no load", "unit weight")
 
 
+def test_a_unit_weight_that_underflows_is_refused(tmp_path):
+    """1e-200 gave "no failure up to 86.5" where 1e-150 gave the factor of safety."""
+    text = BOX.replace("unit_weight: 25", "unit_weight: 1.0e-200")
+    assert_refused(check(tmp_path, text), "unit weight 1e-200 is out of range", "0 (weightless)")
+
+
 @pytest.mark.parametrize(
     "joint, key",
     [

@@ -20,6 +20,9 @@ from .errors import InputError
 GEOMETRY_RTOL = 1e-8
 #: Largest unit weight (beyond it forces overflow in the squares of the solver).
 MAX_UNIT_WEIGHT = 1e9
+#: smallest non-zero unit weight (1e-200 underflowed: "no failure" where 1e-150
+#: gave the factor of safety; rock is 0.026 MN/m^3, 165 lbf/ft^3, 26,000 N/m^3)
+MIN_UNIT_WEIGHT = 1e-6
 #: A block farther than this many typical block sizes from the others makes every
 #: block degenerate under the model-relative tolerance: it is refused by name.
 MAX_SPREAD = 1e7
@@ -127,12 +130,16 @@ class Blocks:
         vertices = np.concatenate(clean)
         fixed_arr = np.broadcast_to(np.asarray(fixed, dtype=bool), (n,)).copy()
         gamma = np.broadcast_to(np.asarray(unit_weight, dtype=float), (n,)).copy()
-        bad = np.flatnonzero(~np.isfinite(gamma) | (gamma < 0) | (gamma > MAX_UNIT_WEIGHT))
+        tiny = (gamma > 0) & (gamma < MIN_UNIT_WEIGHT)  # underflows in the forces
+        bad = np.flatnonzero(
+            ~np.isfinite(gamma) | (gamma < 0) | (gamma > MAX_UNIT_WEIGHT) | tiny
+        )
         if bad.size:
             raise InputError(
                 f"block {label[int(bad[0])]}",
                 f"unit weight {gamma[bad[0]]:g} is out of range",
-                f"give a unit weight from 0 to {MAX_UNIT_WEIGHT:g}",
+                f"give 0 (weightless) or a unit weight from {MIN_UNIT_WEIGHT:g} to "
+                f"{MAX_UNIT_WEIGHT:g}",
             )
         _check_rings(vertices, offsets, label)
         area, _ = _area_centroid(vertices, offsets)
