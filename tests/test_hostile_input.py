@@ -398,6 +398,11 @@ def test_check_refuses_a_trial_naming_an_unknown_block(tmp_path):
             "stabilisation.stages[0].remove",
             "block 2",
         ),
+        (  # a stage that takes every free block away (top-level `remove` refused it)
+            "  stages:\n    - {name: s, remove: {blocks: [1, 2]}}",
+            "stabilisation.stages[0].remove",
+            "removes every free block",
+        ),
         ("  berm: [[-10, 3], [10, 3]]", "stabilisation.berm", "does not overlap"),
         ("  berm: [[5, 3], [0, 3]]", "stabilisation.berm", "x decreases"),
         ("  support: {at: [50, 50]}", "stabilisation.support.at", ""),

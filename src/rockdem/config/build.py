@@ -240,6 +240,11 @@ def _check_stabilisation(model, cfg: ModelFile, source: str, nodes: Any) -> None
         return {"blocks": list(r.blocks), "regions": list(r.regions), "profile": r.profile}
 
     def held(m):
+        if not (~m.blocks.fixed).any():
+            raise InputError(
+                "the design", "removes every free block: nothing is left to analyse",
+                "remove fewer blocks",
+            )
         check_held(m.blocks)  # the analysis of the design would find it singular
         return m
 
