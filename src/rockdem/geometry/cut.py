@@ -200,8 +200,9 @@ def generate_slope(
             raise InputError(
                 f"joint set {s.name!r}",
                 "has rock bridges (gap > 0) but no bridge properties were given",
-                "give generate_slope(..., bridge_joint=Joint(..., cohesion=..., "
-                "tensile_strength=...)) for the intact rock",
+                "give the intact rock's strength as the bridge joint (in a model file "
+                "`slope: {bridge_joint: NAME}` naming a joint with cohesion and "
+                "tensile_strength; in Python generate_slope(..., bridge_joint=Joint(...)))",
             )
         seg_list.append(seg[hits])
         trace_list.append(is_trace[hits])
