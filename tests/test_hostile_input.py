@@ -445,6 +445,12 @@ def test_a_model_without_load_is_refused(tmp_path, text):
     assert_refused(check(tmp_path, text), "free blocks carry no load", "unit weight")
 
 
+def test_a_ground_thicker_than_ten_sections_is_refused_at_its_key(tmp_path):
+    """1e8 made the slope vanish in the tolerances ("block 0 touches no other block")."""
+    text = SLOPE.replace("  depth: 3", "  depth: 3\n  ground_thickness: 1.0e+8")
+    assert_refused(check(tmp_path, text), "slope.ground_thickness", "more than 10 x")
+
+
 def test_a_unit_weight_that_underflows_is_refused(tmp_path):
     """1e-200 gave "no failure up to 86.5" where 1e-150 gave the factor of safety."""
     text = BOX.replace("unit_weight: 25", "unit_weight: 1.0e-200")

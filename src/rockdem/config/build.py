@@ -402,7 +402,10 @@ def _from_engine(
     j = re.match(r"joint '(.+)' (\w+)$", where)
     js = re.match(r"joint set '(.+?)'(?: (\w+))?$", where)
     jl = re.match(r"joint_lines (\d+)$", where)
-    if j and j.group(1) in cfg.joints:
+    gs = re.match(r"generate_slope (\w+)$", where)  # an argument: the slope's key
+    if gs and cfg.slope is not None:
+        loc, label = ("slope", gs.group(1)), ""
+    elif j and j.group(1) in cfg.joints:
         loc, label = ("joints", j.group(1), j.group(2)), ""
     elif js and cfg.slope is not None and js.group(1) in cfg.slope.joint_sets:
         loc = ("slope", "joint_sets", js.group(1)) + ((js.group(2),) if js.group(2) else ())

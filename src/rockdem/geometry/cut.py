@@ -366,13 +366,23 @@ def _ground_block(face, ground_polys, n_free) -> int | None:
     return None
 
 
+#: thickest fixed strip, as a multiple of the section's size
+MAX_GROUND = 10.0
+
+
 def _boundary_strips(section, profile, sides, thickness, free_xy, tol) -> list:
     """Fixed strips along the chosen sides, with a vertex at every block corner on them."""
     if not sides:
         return []
     xmin, ymin, xmax, ymax = section.bounds
-    t = 0.1 * max(xmax - xmin, ymax - ymin) if thickness is None else _positive(
+    size = max(xmax - xmin, ymax - ymin)
+    t = 0.1 * size if thickness is None else _positive(
         "generate_slope ground_thickness", thickness)
+    if t > MAX_GROUND * size:  # the tolerances follow the extent: the slope would vanish
+        raise InputError("generate_slope ground_thickness",
+                         f"{t:g} is more than {MAX_GROUND:g} x the section's size {size:.3g}",
+                         f"give at most {MAX_GROUND * size:.3g} (the ground only has to "
+                         "hold the blocks)")
     yb = ymin
     y_back, y_front = float(profile.points[0, 1]), float(profile.points[-1, 1])
     x, y = free_xy[:, 0], free_xy[:, 1]
