@@ -408,6 +408,10 @@ def test_le_on_a_model_sets_sarma_beside_the_dem(tmp_path):
             "toppling.heights",
         ),
         ("joints: {}\nlimit_equilibrium:\n  wedge: {}\n", "joints"),
+        (  # ran 53 s, then named `heights`
+            TOPPLING_CASE.replace("n_blocks: 16", "n_blocks: 100000000"),
+            "toppling.n_blocks: 1e+08 is out of range",
+        ),
     ],
 )
 def test_le_bad_input_is_one_line_and_exit_2(tmp_path, text, fragment):

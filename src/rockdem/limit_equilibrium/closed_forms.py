@@ -233,6 +233,10 @@ def plane_failure(
 
 
 # ----------------------------------------------------------------- toppling
+#: most blocks of a limit-equilibrium toppling slope
+MAX_TOPPLING_BLOCKS = 10_000
+
+
 def stepped_heights(n_blocks: int, crest_block: int, a1: float, a2: float, b: float) -> np.ndarray:
     """Heights ``y_n`` of a regular toppling slope (Goodman & Bray 1976).
 
@@ -242,7 +246,8 @@ def stepped_heights(n_blocks: int, crest_block: int, a1: float, a2: float, b: fl
     ``a1 = dx tan(psi_f - psi_p)``, ``a2 = dx tan(psi_p - psi_s)`` and the
     step ``b = dx tan(psi_b - psi_p)``.
     """
-    n = int(check_number("toppling", "n_blocks", n_blocks, lo=1))
+    # (a Goodman & Bray slope has tens of blocks; 1e8 ran for a minute)
+    n = int(check_number("toppling", "n_blocks", n_blocks, lo=1, hi=MAX_TOPPLING_BLOCKS))
     nc = int(check_number("toppling", "crest_block", crest_block, lo=1, hi=n + 1))
     y = np.zeros(n)
     for k in range(1, n + 1):
