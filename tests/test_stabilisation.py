@@ -213,3 +213,12 @@ def test_a_slope_that_never_fails_needs_no_support_and_says_so():
     rows = {m.kind: m for m in compare_measures(model, 1.3).measures}
     assert rows["none"].reached and rows["support"].reached
     assert rows["support"].note.startswith("none sized: no failure mechanism")
+
+
+def test_a_support_angle_pointing_out_of_the_rock_names_the_key():
+    """The anchor goes at the mechanism's exposed point; an angle of 15 degrees
+    there points out of the slope: the error names stabilisation.support (it
+    said only "trial anchor: ... does not act on any block")."""
+    model, _ = load_model(example_path("inclined-layers"))
+    with pytest.raises(rd.InputError, match=r"stabilisation\.support: the force at angle 15"):
+        support_force(model, 1.0, angle=15.0)

@@ -104,6 +104,17 @@ def support_force(
             raise InputError("support", "no mechanism to support", "the slope has no failure")
         at = _edit.exposed_point(model, mech)
     at = (float(at[0]), float(at[1]))
+    from ..loads import block_loads
+
+    try:  # the anchor must push into a free block where it acts
+        block_loads(model.blocks, with_support(model, at, angle, 1.0).loads)
+    except InputError as exc:
+        raise InputError(
+            "stabilisation.support",
+            f"the force at angle {angle:g} {exc.problem}",
+            "give an angle that pushes into the slope (about 195 for a face looking toward "
+            "+x: 15 degrees below horizontal), or the support's `at`",
+        ) from None
     count = 0
 
     def enough(force: float) -> bool:
