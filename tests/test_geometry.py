@@ -384,18 +384,31 @@ def test_edge_pairs_by_direction_give_the_interfaces_of_one_r_tree(dip, shift, m
 
     profile = Profile.simple(height=6, face_angle=60)
     sets = [JointSet("bedding", dip, 0.05, J), JointSet("cross", 90.0, 1.5, J, origin=(0.3, 0))]
-    blocks = generate_slope(profile, sets, depth=3).blocks
+    g = generate_slope(profile, sets, depth=3)
     blocks = rd.Blocks.from_polygons(
-        [blocks.outline(k) + shift for k in range(blocks.n_blocks)], fixed=blocks.fixed
+        [g.blocks.outline(k) + shift for k in range(g.blocks.n_blocks)], fixed=g.blocks.fixed
     )
-    grouped = interfaces.find_interfaces(blocks)
+    lines = g.joint_lines + shift
+
+    def search(blocks):  # the interfaces, and the joint trace each lies on
+        faces = interfaces.find_interfaces(blocks)
+        return interfaces.assign_joints(faces, blocks, default=-1, lines=lines,
+                                        line_joint=g.line_joint)
+
+    grouped = search(blocks)
 
     def one_tree(p, q, tol):
         lines = shapely.linestrings(np.stack([p, q], axis=1))
         return shapely.STRtree(lines).query(lines, predicate="dwithin", distance=tol)
 
+    def one_tree_on_lines(faces, lines, tol):
+        tree = shapely.STRtree(shapely.linestrings(lines))
+        return tree.query(shapely.points(faces.midpoint), predicate="dwithin", distance=tol)
+
     monkeypatch.setattr(interfaces, "_edge_pairs", one_tree)
-    ref = interfaces.find_interfaces(blocks)
+    monkeypatch.setattr(interfaces, "_on_lines", one_tree_on_lines)
+    ref = search(blocks)
     assert grouped.n_interfaces == ref.n_interfaces > blocks.n_blocks
-    for name in ("block_a", "block_b", "start", "end"):
+    assert (ref.joint >= 0).sum() > blocks.n_blocks
+    for name in ("block_a", "block_b", "start", "end", "joint"):
         assert np.array_equal(getattr(grouped, name), getattr(ref, name)), name
