@@ -170,3 +170,31 @@ def test_slip_surface_as_ordered_polylines():
             assert {tuple(np.round(p, 6)), tuple(np.round(q, 6))} == ends
         seen += line["interfaces"]
     assert sorted(seen) == sorted(int(i) for i in a.slip_surface)
+
+
+def test_a_mechanism_must_keep_moving_in_a_second_segment():
+    """Where the budget allows, one segment that moves like a mechanism is not
+    enough: the next must move at least as much (block on a plane at 1.1 FS,
+    Hoek & Bray 1981: two segments; without the second look, one)."""
+    dip, phi = 20, 30
+    model = V.block_on_plane(dip, rd.Joint(normal_stiffness=1e6, friction_angle=phi))
+    factor = 1.1 * V.sliding_fos(dip, phi)
+    _, looked = _run(model, factor, max_steps=1000, extend=True)
+    _, once = _run(model, factor, max_steps=1000, extend=True, second_look=False)
+    assert looked.status == once.status == "mechanism"
+    assert (looked.steps, once.steps) == (2000, 1000)
+    assert looked.motion >= once.motion  # it kept moving, faster
+
+
+def test_a_stall_at_the_limit_of_a_small_model_is_proven_by_the_lp(monkeypatch):
+    """Two-block wedge (seed paper, Eq. 7): the Newton stall at the top of the
+    bracket is settled by the equilibrium LP, not by a relaxation run (which
+    took 28,000 steps there to stay undecided); the factor is unchanged."""
+    import rockdem.solver as S
+
+    runs = []
+    monkeypatch.setattr(S, "relax", lambda *a, **k: runs.append(a) or relax(*a, **k))
+    fos = rd.factor_of_safety(V.two_block_wedge(35, 30))
+    assert runs == []
+    assert fos.proof == "lp-certificate"
+    assert fos.value == pytest.approx(V.wedge_fos(200, 75, 37, 27, 35, 30, 35), rel=1e-3)

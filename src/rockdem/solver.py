@@ -72,6 +72,10 @@ HOMOTOPY_MIN_STEP = 1e-4
 #: a check for a stall at the limit relaxes in segments of at most about
 #: this many dof-steps (4,000 steps up to 10,000 dof, 1,000 from 40,000)
 STALL_CHECK_WORK = 4e7
+#: a stall at the limit is first checked with the equilibrium LP on models of
+#: up to this many spring points (a two-block wedge: 8 ms, where relaxation
+#: took 28,000 steps, 0.5 s, to stay undecided; 2,769 points: 1.3 s)
+LP_FIRST_SPRINGS = 500
 #: the reason of an equilibrium found by dynamic relaxation that Newton could
 #: not polish (out-of-balance force within rockdem.relaxation.TOLERANCE)
 RELAXED = "converged by dynamic relaxation"
@@ -482,6 +486,12 @@ def _strength_homotopy(system, state, lam, target, F_ok, q_ok, bad, smallest, ma
         F_try = F_ok + step
         if bad is not None and abs(bad[0] - F_ok) < smallest:
             if bad[1] <= smallest * (1 + 1e-9):  # Newton failed from close by
+                if _proven(system, state, lam, bad[0]):  # no equilibrium can exist there
+                    reason = f"no equilibrium beyond strength factor {F_ok:.6g} ({last.reason})"
+                    return Solve(
+                        False, last.q, last.response, total, history, reason,
+                        last.direction, F_ok, q_ok, bad[0],
+                    )  # fmt: skip
                 # ... a second, independent method looks for equilibrium there
                 # (a segment, continued while its unbalanced force keeps falling)
                 segment = int(np.clip(STALL_CHECK_WORK / system.assembly.n_dof, 1_000, 4_000))
@@ -533,3 +543,13 @@ def _strength_homotopy(system, state, lam, target, F_ok, q_ok, bad, smallest, ma
             last = trial
             bad = (F_try, abs(F_try - F_ok))
             step = 0.5 * (F_try - F_ok)
+
+
+def _proven(system: System, state: SpringState, lam: float, factor: float) -> bool:
+    """The equilibrium LP (:mod:`rockdem.certificate`) proves that no force
+    field carries the loads at ``factor``; solved on small models only."""
+    if system.springs.n_springs > LP_FIRST_SPRINGS:
+        return False
+    from .certificate import admissible_load
+
+    return admissible_load(system, state, lam, factor).proves_failure
