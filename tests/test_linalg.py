@@ -69,3 +69,25 @@ def test_newton_reuses_the_factor_while_the_tangent_is_unchanged(system):
     changed = replace(resp, d_ss=d_ss)
     tangents.factor(changed, q, 1e-2)
     assert system.factorizer.count == before + 3 and tangents.reused == 1
+
+
+def test_the_stiffness_map_is_the_sum_over_spring_points():
+    """``Assembly.stiffness`` (one precomputed sparse product of the spring
+    moduli) equals ``sum_k w_k B_k^T D_k B_k`` summed spring by spring, for a
+    non-symmetric ``D = [[d_nn, 0], [d_sn, d_ss]]`` with random entries."""
+    system = rd.build_system(verification.bedding_slope(bedding_spacing=3.0, cross_spacing=4.5))
+    asm = system.assembly
+    n = system.springs.n_springs
+    d_nn, d_sn, d_ss = np.random.default_rng(7).normal(size=(3, n))
+    K = np.zeros((asm.n_dof, asm.n_dof))
+    for k in range(n):
+        D = np.array([[d_nn[k], 0.0], [d_sn[k], d_ss[k]]])
+        local = asm.weight[k] * asm.B[k].T @ D @ asm.B[k]
+        cols = asm.columns[k]
+        keep = cols >= 0
+        K[np.ix_(cols[keep], cols[keep])] += local[np.ix_(keep, keep)]
+    assembled = asm.stiffness(d_nn, d_sn, d_ss).toarray()
+    tol = 1e-12 * np.abs(K).max()
+    assert np.allclose(assembled, K, rtol=0, atol=tol)
+    shifted = asm.stiffness(d_nn, d_sn, d_ss, 0.25, system.K0).toarray()
+    assert np.allclose(shifted, K + 0.25 * system.K0.toarray(), rtol=0, atol=tol)
