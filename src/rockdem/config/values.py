@@ -157,4 +157,4 @@ Direction = bounded(-360.0, 360.0)
 class _Section(BaseModel):
     """Base of every section: unknown keys are errors, every key documented."""
 
-    model_config = ConfigDict(extra="forbid", use_attribute_docstrings=True)
+    model_config = ConfigDict(extra="forbid", use_attribute_docstrings=True, defer_build=True)
