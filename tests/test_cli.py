@@ -13,6 +13,7 @@ import pytest
 from typer.testing import CliRunner
 
 import rockdem
+from _cli import assert_refused
 from _models import BOX
 from rockdem.cli import EXIT_FAILED, EXIT_INPUT, app
 from rockdem.config import json_schema
@@ -424,6 +425,25 @@ def test_subprocess_writes_results(tmp_path):
     assert sorted(x.name for x in (tmp_path / "res").iterdir()) == sorted(RESULT_FILES)
     p = _python_m("run", "-e", "wedge-verification", "--out", "res", cwd=tmp_path)
     assert p.returncode == 2 and "--overwrite" in p.stderr
+
+
+@pytest.mark.parametrize(
+    "args, fragments",
+    [
+        (("run", "-e", "wedge", "--fast"), ["No such option: --fast", "rockdem run --help"]),
+        (("plot", "-e", "wedge", "--dpi", "abc", "x.png"), ["'--dpi'", "rockdem plot --help"]),
+        (("nonsense",), ["No such command 'nonsense'", "rockdem --help"]),
+        (("run", "-e", "wedge-verification", "--out", ""), ["--out: empty value"]),
+        (("run", "-e", "wedge-verification", "--out="), ["--out: empty value"]),
+        (("run", ""), ["argument 2", "empty value"]),
+    ],
+)  # fmt: skip
+def test_subprocess_usage_errors_are_one_line(tmp_path, args, fragments):
+    """Unknown options and commands, values of the wrong type, and empty
+    arguments (an unset shell variable: ``--out ""`` wrote into the current
+    folder) get one line and exit 2, like every other refusal; nothing is written."""
+    assert_refused(_python_m(*args, cwd=tmp_path), *fragments)
+    assert list(tmp_path.iterdir()) == []
 
 
 def test_subprocess_no_arguments_prints_help():

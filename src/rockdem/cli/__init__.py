@@ -28,6 +28,8 @@ Exit codes
 
 from __future__ import annotations
 
+import sys
+
 from .analyses import _print_fos as _print_fos
 from .analyses import _print_run as _print_run
 from .analyses import _write as _write
@@ -109,5 +111,39 @@ else:
 
 
 def main() -> None:
-    """Console script entry point (``rockdem``, ``python -m rockdem``)."""
-    app(prog_name="rockdem")
+    """Console script entry point (``rockdem``, ``python -m rockdem``).
+
+    An empty argument is refused before anything runs.  A usage error
+    (unknown option, bad value, missing argument) is one line on stderr
+    naming the command's help, exit code 2, like every other error (click
+    prints three lines: usage, a hint and the error).
+    """
+    _refuse_empty_arguments(sys.argv[1:])
+    try:
+        code = app(prog_name="rockdem", standalone_mode=False)
+    except Exception as exc:  # click's own errors carry format_message and exit_code
+        message = getattr(exc, "format_message", None)
+        if message is None:
+            raise
+        if type(exc).__name__ == "NoArgsIsHelpError":  # `rockdem` alone: the help
+            sys.stdout.write(f"{message()}\n")
+            sys.exit(2)
+        ctx = getattr(exc, "ctx", None)
+        hint = f"; see `{ctx.command_path} --help`" if ctx is not None else ""
+        sys.stderr.write(f"error: {message().rstrip('.')}{hint}\n")
+        sys.exit(getattr(exc, "exit_code", 2))
+    sys.exit(code if isinstance(code, int) else 0)
+
+
+def _refuse_empty_arguments(args: list[str]) -> None:
+    """An empty argument is never meant (an unset shell variable, ``--out "$DIR"``):
+    as a path it would be the current folder.  One line naming it, exit 2."""
+    for i, arg in enumerate(args):
+        option = arg[:-1] if arg.startswith("--") and arg.endswith("=") else None
+        if arg == "":
+            option = args[i - 1] if i and args[i - 1].startswith("-") else f"argument {i + 1}"
+        if option is not None:
+            sys.stderr.write(
+                f"error: {option}: empty value; give one (is a shell variable unset?)\n"
+            )
+            sys.exit(2)
