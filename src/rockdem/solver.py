@@ -492,9 +492,14 @@ def _strength_homotopy(system, state, lam, target, F_ok, q_ok, bad, smallest, ma
                 # ... the LP (small models) or a second, independent method
                 # looks for equilibrium there
                 dr = _stall_check(system, state, lam, bad[0], q_ok)
-                if dr is not None and dr.status == "equilibrium":  # a stall: go on from there
+                polish = None
+                if dr is not None and dr.status != "mechanism":
+                    # Newton from where relaxation got to (an undecided run may have
+                    # come within 1e-6 of the loads, not its 1e-7, and stopped moving)
                     polish = _newton(system, state, lam, bad[0], dr.q, HOMOTOPY_ITERATIONS)
                     total += polish.iterations
+                if polish is not None and (dr.status == "equilibrium" or polish.converged):
+                    # a stall, not the limit: go on from there
                     if not polish.converged:  # relaxation's equilibrium, to its tolerance
                         resp_dr, _ = residual(system, dr.q, state, lam, bad[0])
                         polish = Solve(True, dr.q, resp_dr, 0, [], RELAXED, np.zeros_like(dr.q))
