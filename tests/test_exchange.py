@@ -250,6 +250,23 @@ def test_import_prints_the_model_without_out_and_refuses_to_overwrite(tmp_path):
     assert invoke("import", dxf, "-o", out, "--overwrite").exit_code == 0
 
 
+@pytest.mark.parametrize(
+    "bad, fragment",
+    [("friction_angle: 40", "friction_angle: abc"), ("cohesion: 10", "cohesion: -10")],
+)
+def test_a_bad_value_in_the_template_is_named_in_the_template(tmp_path, bad, fragment):
+    """The imported model is validated before it is written: an error at a key
+    the template gave names the template and the key's line there (it named
+    the --out file, not written, or "<import>")."""
+    dxf = draw(tmp_path)
+    template = tmp_path / "model.yaml"
+    template.write_text(MODEL.replace(bad, fragment))
+    out = tmp_path / "m.yaml"
+    line = refused(invoke("import", dxf, "-t", template, "-o", out), "joints.cross.")
+    assert line.startswith(f"error: {template}:5: joints.cross.")
+    assert not out.exists()
+
+
 def test_layer_names_are_overridden_by_a_mapping(tmp_path):
     dxf = draw(tmp_path)
     doc = ezdxf.readfile(dxf)

@@ -46,6 +46,32 @@ def _pairs(values: list[str] | None, option: str) -> dict[str, str]:
     return out
 
 
+def _in_template(exc, template: Path | None):
+    """An error of the imported model at a key the template gave, named in the
+    template at that key's line (the model written, or not written, is not
+    where the user can fix it)."""
+    import re
+
+    from ..config import read_document
+    from ..config.errors import ModelFileError, _line
+
+    if template is None or not exc.key:
+        return exc
+    loc = tuple(
+        int(part) if part.isdigit() else part for part in re.findall(r"[^.\[\]]+", exc.key)
+    )
+    data, nodes = read_document(template)
+    node = data
+    for part in loc:  # the whole key path must be the template's
+        if isinstance(node, dict) and part in node:
+            node = node[part]
+        elif isinstance(node, list) and isinstance(part, int) and part < len(node):
+            node = node[part]
+        else:
+            return exc
+    return ModelFileError(str(template), exc.key, exc.problem, exc.fix, _line(nodes, loc))
+
+
 def import_dxf(
     dxf: Annotated[
         Path | None,
@@ -113,6 +139,7 @@ def import_dxf(
     """
     with _guard(debug):
         from ..config import parse_model
+        from ..config.errors import ModelFileError
         from ..errors import InputError
         from ..exchange.dxf_in import example_dxf
         from ..exchange.model_file import model_text
@@ -164,7 +191,10 @@ def import_dxf(
             max_blocks=_ROOT["max_blocks"],
         )
         source = str(out_file) if out_file is not None else "<import>"
-        parse_model(text, source=source, max_blocks=None)  # what is written loads
+        try:
+            parse_model(text, source=source, max_blocks=None)  # what is written loads
+        except ModelFileError as exc:
+            raise _in_template(exc, template) from None
         if out_file is None:
             typer.echo(text, nl=False)
         else:
