@@ -12,7 +12,14 @@ from typing import Annotated, Any
 import typer
 from rich.console import Console
 from rich.markup import escape
-from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+from rich.progress import (
+    BarColumn,
+    MofNCompleteColumn,
+    Progress,
+    TextColumn,
+    TimeElapsedColumn,
+    TimeRemainingColumn,
+)
 
 from .. import __version__
 from ..exchange.results import FORMATS
@@ -253,12 +260,16 @@ def _check_destination(model: Path, *more: Path) -> None:
 
 @contextmanager
 def _progress(quiet: bool, label: str) -> Iterator[Progress]:
-    """A progress bar on stderr (nothing with --quiet or when stderr is not a terminal)."""
+    """A progress bar on stderr (nothing with --quiet or when stderr is not a
+    terminal), with the time elapsed and the time left at the rate so far (a
+    study of 1e6 samples said nothing of the days it would take)."""
     progress = Progress(
         TextColumn("{task.description}"),
         BarColumn(),
         MofNCompleteColumn(),
         TimeElapsedColumn(),
+        TextColumn("left"),
+        TimeRemainingColumn(),
         console=err,
         transient=True,
         disable=quiet or not err.is_terminal,
