@@ -8,8 +8,8 @@ import pytest
 
 import rockdem as rd
 from rockdem import verification as V
+from rockdem.continuation import solve_equilibrium
 from rockdem.relaxation import relax
-from rockdem.solver import solve_equilibrium
 from rockdem.spring_law import SpringState
 
 
@@ -190,7 +190,7 @@ def test_a_stall_at_the_limit_of_a_small_model_is_proven_by_the_lp(monkeypatch):
     """Two-block wedge (seed paper, Eq. 7): the Newton stall at the top of the
     bracket is settled by the equilibrium LP, not by a relaxation run (which
     took 28,000 steps there to stay undecided); the factor is unchanged."""
-    import rockdem.solver as S
+    import rockdem.continuation as S
 
     runs = []
     monkeypatch.setattr(S, "relax", lambda *a, **k: runs.append(a) or relax(*a, **k))

@@ -17,13 +17,14 @@ from dataclasses import replace
 import numpy as np
 
 from .certificate import certificate_for, prove_failed_trial, prove_in_region, with_certificate
+from .continuation import RELAXED, solve_equilibrium
 from .linalg import norm
 from .mechanism import held_blocks, newton_mechanism, relaxation_mechanism, slip_surface
 from .model import Model
 from .relaxation import TOLERANCE as RELAXATION_TOLERANCE
 from .relaxation import confirm_failed_analysis, confirm_failed_trial
 from .results import Analysis, Evidence, FactorOfSafety, Step, Trial, tabulate
-from .solver import RELAXED, Solve, System, build_system, residual, solve_equilibrium
+from .solver import Solve, System, build_system, residual
 from .spring_law import SpringState, commit
 
 log = logging.getLogger(__name__)

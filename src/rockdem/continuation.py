@@ -1,0 +1,305 @@
+"""From a state to equilibrium at a target: the strategies around one Newton solve.
+
+:func:`solve_equilibrium` tries Newton (:mod:`rockdem.solver`) directly;
+from scratch it releases a fictitious strength first (every spring starts
+on the apex of its Coulomb cone, the worst place for Newton); where the
+target is beyond reach it climbs by a homotopy in the strength factor, a
+bracket search whose failures count only when confirmed from close by.
+A Newton failure at the top of that bracket is checked before it is taken
+for the limit: by the equilibrium LP on small models
+(:mod:`rockdem.certificate`), else by dynamic relaxation
+(:mod:`rockdem.relaxation`), whose equilibrium sends the climb on.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+
+from .linalg import norm
+from .relaxation import relax
+from .solver import Solve, System, newton, residual
+from .spring_law import SpringState
+
+#: fresh starts of the strength homotopy: halve the factor up to this many times
+HOMOTOPY_TRIES = 5
+#: fictitious-strength release from scratch: s -> s * ratio, then 0 below RELEASE_LAST
+RELEASE_RATIO = 0.3
+#: Newton iterations tried from scratch before releasing fictitious strength
+DIRECT_FROM_SCRATCH = 20
+#: Newton iterations per step of the strength homotopy (a step that needs more is halved)
+HOMOTOPY_ITERATIONS = 25
+RELEASE_LAST = 1e-3
+#: smallest relative step of the homotopy before equilibrium is declared lost
+HOMOTOPY_MIN_STEP = 1e-4
+#: a check for a stall at the limit relaxes in segments of at most about
+#: this many dof-steps (4,000 steps up to 10,000 dof) ...
+STALL_CHECK_WORK = 4e7
+#: ... and is not run where a segment would be shorter than this (above
+#: 20,000 dof)
+STALL_CHECK_MIN = 2_000
+#: a stall at the limit is first checked with the equilibrium LP on models of
+#: up to this many spring points (a two-block wedge: 8 ms, where relaxation
+#: took 28,000 steps, 0.5 s, to stay undecided; 2,769 points: 1.3 s)
+LP_FIRST_SPRINGS = 500
+#: the reason of an equilibrium found by dynamic relaxation that Newton could
+#: not polish (out-of-balance force within rockdem.relaxation.TOLERANCE)
+RELAXED = "converged by dynamic relaxation"
+
+
+def _release(system, state, load_factor, factor, max_it, resume=None) -> Solve:
+    """Solve from scratch by releasing fictitious strength.
+
+    At zero displacement every spring sits on the apex of its Coulomb cone
+    (no stress, no strength), the worst place to start Newton.  So add a
+    fictitious cohesion and tensile strength ``s * ref`` (``ref`` the largest
+    elastic spring stress: at ``s = 1`` nothing fails and the elastic solution
+    is exact) and release it, ``s -> 0`` geometrically, each solve starting
+    from the last.  ``reached`` reports the smallest ``s`` that converged.
+    ``resume = (s, q)``: start from a release that got down to ``s`` (at
+    another strength factor) instead of from ``s = 1``.
+    """
+    asm = system.assembly
+    springs = system.springs
+    u = system.lu0.solve(load_factor * system.f_ext)
+    dn, ds = asm.relative_displacement(u)
+    ref = float(max(np.max(np.abs(springs.kn * dn)), np.max(np.abs(springs.ks * ds)), 1e-300))
+    q = np.zeros(asm.n_dof)
+    total, history = 0, []
+    s_ok, ratio = None, RELEASE_RATIO
+    s = 1.0
+    if resume is not None:
+        s, q = resume
+    while True:
+        fict = s * ref
+        relaxed = replace(
+            springs,
+            cohesion=springs.cohesion + fict,
+            cohesion_residual=springs.cohesion_residual + fict,
+            tensile=springs.tensile + fict,
+            tensile_residual=springs.tensile_residual + fict,
+        )
+        sol = newton(replace(system, springs=relaxed), state, load_factor, factor, q, max_it)
+        total += sol.iterations
+        history += sol.residuals
+        if sol.converged:
+            q, s_ok = sol.q, s
+            if s == 0.0:
+                resp, _ = residual(system, q, state, load_factor, factor)
+                return Solve(True, q, resp, total, history, "converged", sol.direction, 0.0)
+            s = s * ratio if s * ratio > RELEASE_LAST else 0.0
+        else:
+            if s_ok is None:
+                return Solve(False, sol.q, sol.response, total, history, "no start", sol.direction)
+            ratio = np.sqrt(ratio)
+            if ratio > 0.9:
+                reason = f"fictitious strength could not be released below {s_ok:.3g}"
+                resp, _ = residual(system, q, state, load_factor, factor)
+                return Solve(False, q, resp, total, history, reason, sol.direction, s_ok)
+            s = s_ok * ratio if s_ok * ratio > RELEASE_LAST else 0.0
+
+
+def solve_equilibrium(
+    system: System,
+    state: SpringState,
+    *,
+    load_factor: float = 1.0,
+    strength_factor: float = 1.0,
+    q0: np.ndarray | None = None,
+    base_factor: float | None = None,
+    max_iterations: int | None = None,
+    resolution: float | None = None,
+) -> Solve:
+    """Displacements in equilibrium with the loads, from the committed state.
+
+    1. A direct Newton solve from ``q0`` (a short one from scratch).
+    2. From scratch, if that fails: release a fictitious strength
+       (:func:`_release`).
+    3. A homotopy in the strength factor, from ``q0`` if it is in equilibrium
+       at ``base_factor`` (or from a released state at a smaller factor): the
+       strength is reduced step by step to the requested factor, each solve
+       starting from the previous one (the step grows x1.5 after a success and
+       is halved after a failure).  Equilibrium is declared lost only when a
+       step smaller than ``resolution`` (default ``HOMOTOPY_MIN_STEP`` x the
+       factor) fails; the result then reports the largest factor reached and
+       the one that failed.
+
+    No state is committed on the way.
+    """
+    asm = system.assembly
+    max_it = max_iterations or system.model.settings.max_iterations
+    q = np.zeros(asm.n_dof) if q0 is None else q0.copy()
+    f_norm = norm(load_factor * system.f_ext * asm.dof_scale)
+    if asm.n_dof == 0 or f_norm == 0.0:
+        resp, _ = residual(system, q, state, load_factor, strength_factor)
+        return Solve(True, q, resp, 0, [0.0], "no load", np.zeros_like(q))
+    fresh = base_factor is None and not np.any(q)
+    sol = newton(
+        system,
+        state,
+        load_factor,
+        strength_factor,
+        q,
+        min(max_it, DIRECT_FROM_SCRATCH) if fresh else max_it,
+    )
+    if sol.converged:
+        return sol
+    total, history = sol.iterations, list(sol.residuals)
+    target = strength_factor
+    if base_factor is not None and q0 is not None:
+        F_ok, q_ok = base_factor, q0
+    else:
+        start = _release(system, state, load_factor, target, max_it)
+        total += start.iterations
+        history += start.residuals
+        if start.converged:
+            return Solve(
+                True, start.q, start.response, total, history, "converged", start.direction
+            )
+        if start.reached is None:
+            return Solve(
+                False, start.q, start.response, total, history, start.reason, start.direction
+            )
+        # the strengths could not all be released: try the strength homotopy from
+        # the weakest fully released state we can find
+        F_ok, q_ok = None, None
+        F_try = target
+        for _ in range(HOMOTOPY_TRIES):
+            F_try *= 0.5
+            # from the last released state (stronger joints hold it), else afresh
+            weak = _release(system, state, load_factor, F_try, max_it, (start.reached, start.q))
+            if weak.reached is None:
+                total += weak.iterations
+                weak = _release(system, state, load_factor, F_try, max_it)
+            total += weak.iterations
+            if weak.converged:
+                F_ok, q_ok = F_try, weak.q
+                break
+        if q_ok is None:
+            return Solve(
+                False, start.q, start.response, total, history, "no start", start.direction
+            )
+    return _strength_homotopy(
+        system,
+        state,
+        load_factor,
+        target,
+        F_ok,
+        q_ok,
+        # the direct attempt at the target failed from q0: the first bracket
+        (target, abs(target - F_ok)) if F_ok == base_factor else None,
+        resolution if resolution is not None else HOMOTOPY_MIN_STEP * abs(target),
+        max_it,
+        (total, history, sol),
+    )
+
+
+def _strength_homotopy(system, state, lam, target, F_ok, q_ok, bad, smallest, max_it, so_far):
+    """Reduce the strength from ``F_ok`` (in equilibrium at ``q_ok``) to ``target``.
+
+    A bracket search on the strength factor: the step grows x1.5 after a
+    success and never reaches the smallest factor that failed (``bad``: the
+    factor and the distance from which it was tried), so near the limit the
+    search is a bisection.  Each solve starts from the last equilibrium.
+    (A secant predictor and a shorter stall window while exploring were
+    measured: no fewer factorisations, and a less stable mechanism.)  A
+    failure is only taken as the limit once it is confirmed from an
+    equilibrium within ``smallest`` of it; a failure from farther away that
+    later converges is forgotten.
+    """
+    total, history, last = so_far
+    step = target - F_ok
+    if bad is not None:
+        step *= 0.5
+    if step == 0:  # re-solving at the equilibrium's own factor: one more fresh attempt
+        bad = (target, np.inf)
+    while True:
+        F_try = F_ok + step
+        if bad is not None and abs(bad[0] - F_ok) < smallest:
+            if bad[1] <= smallest * (1 + 1e-9):  # Newton failed from close by
+                # ... the LP (small models) or a second, independent method
+                # looks for equilibrium there
+                dr = _stall_check(system, state, lam, bad[0], q_ok)
+                polish = None
+                if dr is not None and dr.status != "mechanism":
+                    # Newton from where relaxation got to (an undecided run may have
+                    # come within 1e-6 of the loads, not its 1e-7, and stopped moving)
+                    polish = newton(system, state, lam, bad[0], dr.q, HOMOTOPY_ITERATIONS)
+                    total += polish.iterations
+                if polish is not None and (dr.status == "equilibrium" or polish.converged):
+                    # a stall, not the limit: go on from there
+                    if not polish.converged:  # relaxation's equilibrium, to its tolerance
+                        resp_dr, _ = residual(system, dr.q, state, lam, bad[0])
+                        polish = Solve(True, dr.q, resp_dr, 0, [], RELAXED, np.zeros_like(dr.q))
+                    if bad[0] == target:
+                        return replace(polish, iterations=total, residuals=history)
+                    F_ok, q_ok, step = bad[0], polish.q, bad[1]
+                    bad = None
+                    continue
+                reason = f"no equilibrium beyond strength factor {F_ok:.6g} ({last.reason})"
+                return Solve(
+                    False,
+                    last.q,
+                    last.response,
+                    total,
+                    history,
+                    reason,
+                    last.direction,
+                    F_ok,
+                    q_ok,
+                    bad[0],
+                    _stall_text(dr),
+                )
+            F_try = bad[0]  # tried from afar: try again from here
+        elif bad is not None and (F_try - bad[0]) * step >= 0:  # never past a failure
+            F_try = 0.5 * (F_ok + bad[0])
+        trial = newton(system, state, lam, F_try, q_ok, min(max_it, HOMOTOPY_ITERATIONS))
+        total += trial.iterations
+        history += trial.residuals
+        if trial.converged:
+            if F_try == target:
+                return Solve(
+                    True, trial.q, trial.response, total, history, "converged", trial.direction
+                )
+            distance = abs(F_try - F_ok)
+            F_ok, q_ok = F_try, trial.q
+            if bad is not None and F_try == bad[0]:  # a failure from afar was not the limit
+                bad, step = None, 0.5 * bad[1]
+            step = np.sign(target - F_ok) * max(1.5 * abs(step), distance)
+            if (target - F_ok) * (target - F_ok - step) <= 0:  # do not overshoot
+                step = target - F_ok
+        else:
+            last = trial
+            bad = (F_try, abs(F_try - F_ok))
+            step = 0.5 * (F_try - F_ok)
+
+
+def _stall_check(system: System, state: SpringState, lam: float, factor: float, q0):
+    """Is the Newton failure at ``factor`` (from an equilibrium ``q0`` just
+    below it) a stall?  None when nothing was run or the LP proved that no
+    force field carries the loads there; else the dynamic relaxation's run
+    (a segment, continued while its unbalanced force keeps falling).
+
+    On small models the LP (:mod:`rockdem.certificate`) comes first.  On
+    large ones (a segment of under STALL_CHECK_MIN steps) nothing runs:
+    such short runs were undecided (9,638 blocks: 1,383 steps, 3.8 s), and
+    the confirmation beyond the bracket, which sends the search on when it
+    finds equilibrium there, is run anyway.
+    """
+    if system.springs.n_springs <= LP_FIRST_SPRINGS:
+        from .certificate import admissible_load
+
+        if admissible_load(system, state, lam, factor).proves_failure:
+            return None
+    segment = int(min(STALL_CHECK_WORK / system.assembly.n_dof, 4_000))
+    if segment < STALL_CHECK_MIN:
+        return None
+    return relax(system, state, lam, factor, q0, max_steps=segment, extend=True)
+
+
+def _stall_text(run) -> str | None:
+    """What the stall check said, for the evidence."""
+    if run is None:
+        return None
+    return str(run) if run.status != "equilibrium" else f"{run}; Newton could not polish it"
