@@ -24,7 +24,7 @@ from .model import Model
 from .relaxation import TOLERANCE as RELAXATION_TOLERANCE
 from .relaxation import confirm_failed_analysis, confirm_failed_trial
 from .results import Analysis, Evidence, FactorOfSafety, Step, Trial, tabulate
-from .solver import Solve, System, build_system, residual
+from .solver import KINKED, Solve, System, build_system, residual
 from .spring_law import SpringState, commit
 
 log = logging.getLogger(__name__)
@@ -77,7 +77,7 @@ def _settle(
         resp, r = residual(system, sol.q, new_state, load_factor, factor)
         state = new_state
         # an equilibrium of the dynamic relaxation holds to that method's tolerance
-        held = max(tol, RELAXATION_TOLERANCE) if sol.reason == RELAXED else tol
+        held = max(tol, RELAXATION_TOLERANCE) if sol.reason in (RELAXED, KINKED) else tol
         if f_norm == 0 or norm(r * scale) <= held * f_norm:
             sol = Solve(True, sol.q, resp, iterations, history, sol.reason, sol.direction)
             break

@@ -260,7 +260,7 @@ def _strength_homotopy(system, state, lam, target, F_ok, q_ok, bad, smallest, ma
         if trial.converged:
             if F_try == target:
                 return Solve(
-                    True, trial.q, trial.response, total, history, "converged", trial.direction
+                    True, trial.q, trial.response, total, history, trial.reason, trial.direction
                 )
             distance = abs(F_try - F_ok)
             F_ok, q_ok = F_try, trial.q
