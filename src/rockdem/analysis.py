@@ -76,7 +76,8 @@ def _settle(
             new_state = new_state.without_slip()
         resp, r = residual(system, sol.q, new_state, load_factor, factor)
         state = new_state
-        # an equilibrium of the dynamic relaxation holds to that method's tolerance
+        # an equilibrium of the dynamic relaxation (or a Newton solve that stopped
+        # within that method's tolerance) holds to that tolerance
         held = max(tol, RELAXATION_TOLERANCE) if sol.reason in (RELAXED, KINKED) else tol
         if f_norm == 0 or norm(r * scale) <= held * f_norm:
             sol = Solve(True, sol.q, resp, iterations, history, sol.reason, sol.direction)
