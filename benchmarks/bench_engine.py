@@ -87,6 +87,7 @@ def one_size(n: int, repeat: int, fos: bool) -> dict:
             fos=result.value,
             bracket=list(result.bracket),
             factorisations=n_fact,
+            newton_iterations=sum(t.evidence.iterations for t in result.trials),
             one_factorisation=t_one,
             ratio=t_fos / t_one,
             proof=result.proof,
@@ -121,9 +122,9 @@ def main() -> None:
     print()
     print(
         "| brick slope blocks | dof | build s | analyse s | FS s | FS | proof | "
-        "LU count | one LU s | FS / one LU | backend | peak MB |"
+        "LU count | Newton iterations | one LU s | FS / one LU | backend | peak MB |"
     )
-    print("|---|---|---|---|---|---|---|---|---|---|---|---|")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|")
     rows = []
     for n in args.sizes:
         cmd = [
@@ -142,10 +143,11 @@ def main() -> None:
         fos_s = f"{r['fos_seconds']:.2f}" if "fos_seconds" in r else "-"
         fos_v = f"{r['fos']:.4f}" if r.get("fos") else "-"
         extra = (
-            f"{r['proof']} | {r['factorisations']:.0f} | {r['one_factorisation']:.4f} | "
+            f"{r['proof']} | {r['factorisations']:.0f} | {r['newton_iterations']} | "
+            f"{r['one_factorisation']:.4f} | "
             f"{r['ratio']:.0f} | {r['backend']}"
             if "ratio" in r
-            else "- | - | - | - | -"
+            else "- | - | - | - | - | -"
         )
         print(
             f"| {r['n']:,} | {r['dof']:,} | {r['build']:.2f} | {r['analyse']:.2f} | {fos_s} | "

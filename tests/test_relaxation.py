@@ -198,3 +198,44 @@ def test_a_stall_at_the_limit_of_a_small_model_is_proven_by_the_lp(monkeypatch):
     assert runs == []
     assert fos.proof == "lp-certificate"
     assert fos.value == pytest.approx(V.wedge_fos(200, 75, 37, 27, 35, 30, 35), rel=1e-3)
+
+
+@pytest.mark.parametrize(
+    "model, dense",
+    [(V.two_block_wedge(35, 30), True), (V.brick_slope(300), False)],
+    ids=["wedge-dense", "brick-sparse"],
+)
+def test_explicit_step_force_is_the_spring_law_bit_for_bit(model, dense):
+    """The relaxation's out-of-balance force (operators reordered so that the
+    normal and shear displacements are each contiguous, the law written in
+    place) equals ``f - B^T W forces(B q)`` to the last bit, on the dense and
+    the sparse layout, with slip, sliding, open and elastic points."""
+    from rockdem.relaxation import DENSE_ENTRIES, _Unbalanced
+    from rockdem.spring_law import forces, strength
+
+    system = rd.build_system(model)
+    B = system.assembly.operator
+    assert (B.shape[0] * B.shape[1] <= DENSE_ENTRIES) == dense
+    rng = np.random.default_rng(3)
+    n = system.springs.n_springs
+    base = SpringState.initial(n)
+    slip = rng.normal(0, 1e-4, n)
+    state = SpringState(slip, base.yielded, base.broken, base.first_failure, base.bolt_first_yield)
+    strengths = strength(system.springs, state, 1.7)
+    f = 0.9 * system.f_ext
+    unbalanced = _Unbalanced(system, state.slip, strengths, f)
+    BtW = system.assembly.weighted_transpose
+    if dense:  # the products of a few blocks are dense (as they were before)
+        B, BtW = B.toarray(), BtW.toarray()
+    for scale in (1e-6, 1e-4, 1e-2):
+        q = rng.normal(0, scale, system.assembly.n_dof)
+        d = (B @ q).reshape(-1, 2)
+        dn, ds = d[:, 0], d[:, 1]
+        p = forces(system.springs, state.slip, strengths, dn, ds)
+        expected = f - BtW @ p.ravel()
+        assert np.array_equal(unbalanced(q), expected)
+    # the points were in every regime of the law at the largest displacements
+    pull = system.springs.kn * dn
+    tau = np.abs(system.springs.ks * (ds - state.slip))
+    assert (pull > strengths[2]).any() and (pull < 0).any()
+    assert (tau >= np.maximum(strengths[0] - pull * strengths[1], 0)).any()

@@ -33,9 +33,10 @@ import itertools
 from dataclasses import dataclass, replace
 
 import numpy as np
+import scipy.sparse as sp
 
 from .linalg import norm
-from .spring_law import SpringState, forces, strength
+from .spring_law import SpringState, strength
 
 #: Cundall's local damping coefficient (UDEC's default)
 DAMPING = 0.8
@@ -144,17 +145,7 @@ def relax(
     # the same law and equations as Newton; the strengths are fixed for the run
     strengths = strength(springs, state, factor, system.model.settings.reduce_tensile)
 
-    B, BtW = asm.operator, asm.weighted_transpose
-    if B.shape[0] * B.shape[1] <= DENSE_ENTRIES:  # a few blocks: dense products
-        B, BtW = B.toarray(), BtW.toarray()
-    p = np.empty((springs.n_springs, 2))  # spring forces, written in place each step
-
-    def unbalanced(q_):
-        d = (B @ q_).reshape(-1, 2)
-        r_ = f - BtW @ forces(springs, state.slip, strengths, d[:, 0], d[:, 1], p).ravel()
-        if system.bolts is not None:
-            r_ -= system.bolts.internal_force(q_)
-        return r_
+    unbalanced = _Unbalanced(system, state.slip, strengths, f)
 
     mass = np.asarray(abs(system.K0).sum(axis=1)).ravel()
     elastic = system.elastic_scale * max(load_factor, 1e-12)
@@ -168,8 +159,15 @@ def relax(
     peaks = [0.0]  # the largest ratio in each window of the segment (it oscillates)
     step = 0
     pending = None  # the late motion of a segment that moved like a mechanism
+    drive = np.empty_like(q)
     for step in range(1, budget + 1):
-        v += (r - DAMPING * np.abs(r) * np.sign(v)) / mass
+        # v += (r - DAMPING |r| sign(v)) / mass, in place (the same operations)
+        np.abs(r, out=drive)
+        drive *= DAMPING
+        drive *= np.sign(v)
+        np.subtract(r, drive, out=drive)
+        drive /= mass
+        v += drive
         q += v
         r = unbalanced(q)
         ratio = norm(r * scale) / f_norm
@@ -222,6 +220,78 @@ def relax(
         # settling, or moving where the budget allows a second look: one more segment
         seg_start, late_start, late_low, peaks = step, None, np.inf, [0.0]
     return Relaxation("undecided", q, step, float(ratio), 0.0)
+
+
+class _Unbalanced:
+    """``r(q) = f - B^T W F(B q)`` (minus the bolts' forces) for one run: the
+    strengths and slip are fixed for the run, so the spring data are
+    gathered once and every step works in preallocated arrays.
+
+    The operators' rows (``B``) and columns (``B^T W``) are reordered so that
+    the normal and the shear relative displacements are each contiguous;
+    every row of both products still sums its terms in the original order,
+    so the result is bit for bit that of ``f - B^T W forces(B q)``.  (An
+    explicit step is two sparse products and a few passes over the spring
+    points; on a model of a few blocks the products are dense, see
+    DENSE_ENTRIES, and the layout stays interleaved.)
+    """
+
+    def __init__(self, system, slip, strengths, f):
+        asm = system.assembly
+        springs = system.springs
+        n = springs.n_springs
+        B, BtW = asm.operator, asm.weighted_transpose
+        if B.shape[0] * B.shape[1] <= DENSE_ENTRIES:  # a few blocks: dense products
+            self.B, self.BtW = B.toarray(), BtW.toarray()
+            self.d = np.empty(2 * n)
+            self.p = np.empty(2 * n)
+            self.dn, self.ds = self.d[0::2], self.d[1::2]
+            self.pn, self.ps = self.p[0::2], self.p[1::2]
+        else:
+            order = np.concatenate([np.arange(0, 2 * n, 2), np.arange(1, 2 * n, 2)])
+            self.B = B[order]  # rows moved whole: each sums as before
+            where = np.empty_like(order)
+            where[order] = np.arange(2 * n)
+            # columns renamed in place, not sorted: each row sums in its old order
+            self.BtW = sp.csr_array(
+                (BtW.data, where[BtW.indices].astype(BtW.indices.dtype), BtW.indptr),
+                shape=BtW.shape,
+            )
+            self.BtW.has_sorted_indices = False
+            self.d = np.empty(2 * n)
+            self.p = np.empty(2 * n)
+            self.dn, self.ds = self.d[:n], self.d[n:]
+            self.pn, self.ps = self.p[:n], self.p[n:]
+        c, tan_phi, tensile = strengths
+        self.kn, self.ks, self.slip = springs.kn, springs.ks, slip
+        self.c, self.tan_phi, self.tensile = c, tan_phi, tensile
+        self.cap = np.empty(n)
+        self.low = np.empty(n)
+        self.f = f
+        self.bolts = system.bolts
+
+    def __call__(self, q: np.ndarray) -> np.ndarray:
+        """The out-of-balance force at ``q`` (a new array)."""
+        if sp.issparse(self.B):
+            self.d[:] = self.B @ q
+        else:
+            np.matmul(self.B, q, out=self.d)
+        # the law of spring_law.forces: -sigma = min(kn dn, T); the capacity
+        # max(c + sigma tan phi, 0); tau = ks (ds - slip) clipped to it
+        pn, ps, cap = self.pn, self.ps, self.cap
+        np.multiply(self.kn, self.dn, out=pn)
+        np.minimum(pn, self.tensile, out=pn)
+        np.multiply(pn, self.tan_phi, out=cap)
+        np.subtract(self.c, cap, out=cap)
+        np.maximum(cap, 0.0, out=cap)
+        np.subtract(self.ds, self.slip, out=ps)
+        ps *= self.ks
+        np.negative(cap, out=self.low)
+        np.clip(ps, self.low, cap, out=ps)
+        r = self.f - self.BtW @ self.p
+        if self.bolts is not None:
+            r -= self.bolts.internal_force(q)
+        return r
 
 
 def step_budget(n_dof: int, max_steps: int = MAX_STEPS) -> int:

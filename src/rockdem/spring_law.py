@@ -145,9 +145,11 @@ def trial_stresses(springs: Springs, slip, strengths, dn, ds):
 
 
 def forces(springs: Springs, slip, strengths, dn, ds, out=None) -> np.ndarray:
-    """Generalised forces ``(-sigma, tau)`` only (no tangent), shape (n, 2):
-    for explicit dynamics, where the strengths are fixed for the whole run.
-    ``out``: an (n, 2) array to write into (called every explicit step)."""
+    """Generalised forces ``(-sigma, tau)`` only (no tangent), shape (n, 2),
+    for strengths fixed in advance: the law of an explicit step, which
+    :class:`rockdem.relaxation._Unbalanced` evaluates in place on its own
+    layout (tested to give these values bit for bit).  ``out``: an (n, 2)
+    array to write into."""
     _, sigma, raw_cap, tau_trial = trial_stresses(springs, slip, strengths, dn, ds)
     out = np.empty((len(dn), 2)) if out is None else out
     np.negative(sigma, out=out[:, 0])
