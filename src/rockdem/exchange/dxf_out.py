@@ -126,7 +126,7 @@ def write_dxf(path: str | Path, model, analysis=None, *, modes=None, units=None)
     units : rockdem.units.Units, optional
         Its length unit sets ``$INSUNITS`` (unitless when not known).
     """
-    from .dxf_in import INSUNITS
+    from .dxf_entities import INSUNITS
 
     length = getattr(units, "length", None)
     doc = _new_doc(INSUNITS.get(length, 0) if length else 0)
