@@ -13,8 +13,6 @@ from __future__ import annotations
 
 import base64
 import datetime as _dt
-import html
-import io
 import platform
 from collections.abc import Sequence
 from pathlib import Path
@@ -24,280 +22,53 @@ import numpy as np
 from . import plots
 from .analysis import analyse, factor_of_safety
 from .model import Model
-from .modes import boundary_warnings, failure_modes
+from .report_html import CSS, esc, figure_uri, html_table, img, num
+from .report_tables import bolts_table, failed_table, state_counts, unstable_table, warnings_html
 from .results import Analysis, FactorOfSafety, format_factor
 from .trust import trust_statements
-from .units import UNKNOWN, Units, parse_units
-
-_CSS = """
-body{font-family:system-ui,-apple-system,"Segoe UI",Roboto,Helvetica,Arial,sans-serif;
- margin:0 auto;max-width:1100px;padding:1em 2em;color:#222;line-height:1.4}
-h1{margin-bottom:.2em}h2{border-bottom:2px solid #0072B2;padding-bottom:.15em;margin-top:1.6em}
-.meta{color:#555;font-size:.9em}
-.verdict{display:inline-block;padding:.6em 1em;border-radius:6px;font-size:1.15em;margin:.4em 0}
-.stable{background:#d7f0e6;border:2px solid #009E73}
-.unstable{background:#f9e0cc;border:2px solid #D55E00}
-.fos{font-size:1.3em;font-weight:600}
-table{border-collapse:collapse;margin:.5em 0 1em;font-size:.88em}
-th,td{border:1px solid #ccc;padding:.2em .55em;text-align:right}
-th{background:#eef3f8}td.l,th.l{text-align:left}
-figure{margin:1em 0}figure img{max-width:100%;height:auto;border:1px solid #ddd}
-figcaption{color:#444;font-size:.9em}
-.note{color:#555;font-size:.88em}
-.warning{background:#fff4cc;border:2px solid #E69F00;border-radius:6px;padding:.5em 1em;
- margin:.5em 0}
-nav a{margin-right:1em}
-"""
-
-
-# ------------------------------------------------------------------ helpers
-def _esc(x) -> str:
-    return html.escape(str(x), quote=True)
-
-
-def _num(x, fmt: str = ".4g") -> str:
-    if x is None:
-        return "-"
-    try:
-        v = float(x)
-    except (TypeError, ValueError):
-        return _esc(x)
-    if np.isinf(v):
-        return "∞" if v > 0 else "-∞"
-    if np.isnan(v):
-        return "-"
-    return format(v, fmt)
-
-
-def _table(header: Sequence[str], rows: Sequence[Sequence], left: int = 0, cls: str = "") -> str:
-    """An HTML table; the first ``left`` columns are left-aligned text."""
-    head = "".join(
-        f'<th class="l">{_esc(h)}</th>' if i < left else f"<th>{_esc(h)}</th>"
-        for i, h in enumerate(header)
-    )
-    body = []
-    for row in rows:
-        cells = "".join(
-            f'<td class="l">{_esc(v)}</td>' if i < left else f"<td>{v}</td>"
-            for i, v in enumerate(row)
-        )
-        body.append(f"<tr>{cells}</tr>")
-    return (
-        f'<table class="{cls}"><thead><tr>{head}</tr></thead><tbody>{"".join(body)}</tbody></table>'
-    )
-
-
-def _figure_uri(fig, fmt: str, dpi: int) -> str:
-    buf = io.BytesIO()
-    fig.savefig(buf, format=fmt, dpi=dpi)
-    mime = "image/svg+xml" if fmt == "svg" else f"image/{fmt}"
-    return f"data:{mime};base64," + base64.b64encode(buf.getvalue()).decode("ascii")
-
-
-def _img(uri: str, caption: str, alt: str, ident: str) -> str:
-    return (
-        f'<figure id="{_esc(ident)}"><img src="{uri}" alt="{_esc(alt)}">'
-        f"<figcaption>{caption}</figcaption></figure>"
-    )
-
-
-def _state_counts(a: Analysis) -> str:
-    """Current state and failure history of the interfaces, kept apart."""
-    now = np.bincount(a.interfaces.current, minlength=4)
-    s = a.interfaces.state
-    return (
-        f"now {int(now[2])} sliding, {int(now[3])} open, {int(now[1])} failed earlier and "
-        f"now closed, {int(now[0])} elastic interfaces (history: {int((s > 0).sum())} have "
-        f"failed at some time, {int((s == 1).sum())} in shear, {int((s == 2).sum())} in "
-        "tension)"
-    )
-
-
-#: current state of a failed interface, in words (codes of rockdem.results.CURRENT_NAMES)
-_NOW = ("closed", "closed", "sliding", "open")
-
-
-def _failed_table(a: Analysis, stress_unit: str, limit: int, u: Units = UNKNOWN) -> str:
-    """Every interface that has failed at some time (the history), with its state now."""
-    ir = a.interfaces
-    faces = a.system.interfaces
-    idx = np.flatnonzero(ir.state > 0)
-    if not idx.size:
-        return '<p class="note">No interface has failed.</p>'
-    slip = set(np.asarray(a.slip_surface).tolist())
-    rows = []
-    for i in idx[:limit]:
-        rows.append(
-            [
-                str(ir.kind[i]),
-                str(ir.state_name[i]),
-                _NOW[int(ir.current[i])],
-                int(i),
-                f"{int(ir.block_a[i])} / {int(ir.block_b[i])}",
-                f"({_num(faces.start[i][0], '.3g')}, {_num(faces.start[i][1], '.3g')}) - "
-                f"({_num(faces.end[i][0], '.3g')}, {_num(faces.end[i][1], '.3g')})",
-                _num(ir.length[i], ".3g"),
-                _num(100 * ir.failed_fraction[i], ".0f"),
-                _num(ir.normal_stress[i], ".3g"),
-                _num(ir.shear_stress[i], ".3g"),
-                int(ir.first_failure[i]),
-                "yes" if int(i) in slip else "",
-            ]
-        )
-    header = [
-        "joint",
-        "failed in",
-        "now",
-        "interface",
-        "blocks",
-        "from - to",
-        "length" + u.suffix("length"),
-        "failed %",
-        f"σ mean ({stress_unit})",
-        f"τ mean ({stress_unit})",
-        "first failed (stage)",
-        "slip surface",
-    ]
-    more = f'<p class="note">... and {idx.size - limit} more.</p>' if idx.size > limit else ""
-    table = _table(header, rows, left=3, cls="failed-joints") + more
-    if idx.size <= 15:
-        return table
-    return (
-        f"<details><summary>{idx.size} interfaces that have failed at some time "
-        f"(click to show)</summary>{table}</details>"
-    )
-
-
-def _unstable_table(a: Analysis, limit: int, u: Units = UNKNOWN) -> str:
-    """The moving blocks with their failure mode (rockdem.modes) and mechanism motion."""
-    blocks = a.system.blocks
-    idx = np.flatnonzero(a.unstable)
-    if not idx.size:
-        return '<p class="note">No block moves (no failure mechanism).</p>'
-    rows = []
-    mech = plots.oriented_mechanism(a)
-    modes = failure_modes(a)
-    for i in idx[:limit]:
-        ux, uy, rot = mech[i]
-        px, py = modes.pivot[i]
-        rows.append(
-            [
-                int(blocks.ids[i]),
-                str(modes.name[i]),
-                f"({_num(px, '.4g')}, {_num(py, '.4g')})" if np.isfinite(px) else "",
-                _num(blocks.area[i], ".4g"),
-                _num(blocks.weight[i], ".4g"),
-                f"({_num(blocks.centroid[i][0], '.4g')}, {_num(blocks.centroid[i][1], '.4g')})",
-                _num(ux, ".3f"),
-                _num(uy, ".3f"),
-                _num(rot, ".3g"),
-            ]
-        )
-    header = [
-        "block",
-        "failure mode",
-        "pivot",
-        "area" + u.suffix("area"),
-        "weight" + u.suffix("force"),
-        "centroid",
-        "mech. ux",
-        "mech. uy",
-        "mech. rot",
-    ]
-    more = f'<p class="note">... and {idx.size - limit} more.</p>' if idx.size > limit else ""
-    counts = ", ".join(f"{n} {m}" for m, n in modes.counts().items() if n and m != "stable")
-    lead = f'<p class="modes">Failure modes: {_esc(counts)}.</p>'
-    return lead + _table(header, rows, left=2, cls="unstable-blocks") + more
-
-
-def _bolts_table(a: Analysis, u: Units = UNKNOWN) -> str:
-    """Every joint a bolt crosses: force per bolt, capacity there, utilisation."""
-    r = a.bolts
-    if r is None:
-        return ""
-    use = r.utilisation
-    rows = [
-        [
-            str(r.name[k]),
-            _num(r.depth[k], ".3g"),
-            f"({_num(r.point[k, 0], '.4g')}, {_num(r.point[k, 1], '.4g')})",
-            _num(r.axial_force[k], ".4g"),
-            _num(r.shear_force[k], ".4g"),
-            _num(r.capacity[k], ".4g"),
-            f"{100 * use[k]:.0f}%",
-            "yes" if r.yielded[k] else "",
-        ]
-        for k in np.argsort(-use, kind="stable")
-    ]
-    header = [
-        "bolt",
-        "depth" + u.suffix("length"),
-        "at joint",
-        "axial force" + u.suffix("force"),
-        "shear force" + u.suffix("force"),
-        "capacity" + u.suffix("force"),
-        "utilisation",
-        "yielded",
-    ]
-    note = (
-        '<p class="note">Force per bolt where it crosses each joint (tension positive), '
-        "most used first; capacity is the steel's or the grout bond's beyond the joint.</p>"
-    )
-    return note + _table(header, rows, left=3, cls="bolts")
-
-
-def _warnings(*analyses: Analysis | None) -> str:
-    """A warning box per side of the model the mechanism reaches (rockdem.modes)."""
-    shown: dict[str, str] = {}  # message -> the factor of the first state that gave it
-    for a in analyses:
-        for text in boundary_warnings(a) if a is not None else ():
-            shown.setdefault(text, format_factor(a.strength_factor))
-    return "".join(
-        f'<div class="warning">Warning (mechanism at F = {F}): {_esc(t)}.</div>'
-        for t, F in shown.items()
-    )
+from .units import parse_units
 
 
 def _inputs(model: Model, system, units: str | None) -> str:
     blocks = system.blocks
     n_free = int((~blocks.fixed).sum())
     summary = [
-        ["name", _esc(model.name)],
-        ["units", _esc(units or "consistent user units (not stated)")],
+        ["name", esc(model.name)],
+        ["units", esc(units or "consistent user units (not stated)")],
         ["blocks", f"{blocks.n_blocks} ({n_free} free, {blocks.n_blocks - n_free} fixed)"],
         ["interfaces", str(system.interfaces.n_interfaces)],
         ["spring points", str(system.springs.n_springs)],
         [
             "weight of free blocks" + parse_units(units).suffix("force"),
-            _num(blocks.weight[~blocks.fixed].sum(), ".5g"),
+            num(blocks.weight[~blocks.fixed].sum(), ".5g"),
         ],
     ]
     s = model.settings
     summary += [
-        ["quadrature", f"{_esc(s.quadrature)}, {s.points_per_interface} points per interface"],
+        ["quadrature", f"{esc(s.quadrature)}, {s.points_per_interface} points per interface"],
         ["load steps", str(s.load_steps)],
-        ["tolerance", _num(s.tolerance, ".1e")],
+        ["tolerance", num(s.tolerance, ".1e")],
     ]
-    out = [_table(["quantity", "value"], summary, left=1, cls="summary")]
+    out = [html_table(["quantity", "value"], summary, left=1, cls="summary")]
     used = np.bincount(system.interfaces.joint, minlength=len(model.joints))
     rows = [
         [
             j.name,
             "yes" if model.ground == k else "",
-            _num(j.normal_stiffness, ".4g"),
-            _num(j.shear_stiffness, ".4g"),
-            _num(j.friction_angle, ".4g"),
-            _num(j.cohesion, ".4g"),
-            _num(j.tensile_strength, ".4g"),
-            _num(j.residual_friction_angle, ".4g"),
-            _num(j.residual_cohesion, ".4g"),
+            num(j.normal_stiffness, ".4g"),
+            num(j.shear_stiffness, ".4g"),
+            num(j.friction_angle, ".4g"),
+            num(j.cohesion, ".4g"),
+            num(j.tensile_strength, ".4g"),
+            num(j.residual_friction_angle, ".4g"),
+            num(j.residual_cohesion, ".4g"),
             int(used[k]),
         ]
         for k, j in enumerate(model.joints)
     ]
     out.append("<h3>Joints</h3>")
     out.append(
-        _table(
+        html_table(
             [
                 "joint",
                 "ground",
@@ -318,30 +89,30 @@ def _inputs(model: Model, system, units: str | None) -> str:
     ld = model.loads
     rows = [
         ["self-weight", "on" if ld.gravity else "off"],
-        ["seismic kh / kv", f"{_num(ld.seismic_h)} / {_num(ld.seismic_v)}"],
+        ["seismic kh / kv", f"{num(ld.seismic_h)} / {num(ld.seismic_v)}"],
     ]
     for k, p in enumerate(ld.points):
         kind = "support" if p.support else "point load"
         rows.append(
-            [f"{kind} {p.name or k}", f"({_num(p.fx)}, {_num(p.fy)}) at ({_num(p.x)}, {_num(p.y)})"]
+            [f"{kind} {p.name or k}", f"({num(p.fx)}, {num(p.fy)}) at ({num(p.x)}, {num(p.y)})"]
         )
     for k, line in enumerate(ld.lines):
         rows.append(
             [
                 f"line load {line.name or k}",
-                f"({_num(line.qx)}, {_num(line.qy)})"
+                f"({num(line.qx)}, {num(line.qy)})"
                 + (
                     ""
                     if line.q_end is None
-                    else f" to ({_num(line.q_end[0])}, {_num(line.q_end[1])}) (linear)"
+                    else f" to ({num(line.q_end[0])}, {num(line.q_end[1])}) (linear)"
                 )
                 + " per length from "
-                f"({_num(line.start[0])}, {_num(line.start[1])}) to "
-                f"({_num(line.end[0])}, {_num(line.end[1])})",
+                f"({num(line.start[0])}, {num(line.start[1])}) to "
+                f"({num(line.end[0])}, {num(line.end[1])})",
             ]
         )
     out.append("<h3>Loads</h3>")
-    out.append(_table(["load", "value"], rows, left=2, cls="loads"))
+    out.append(html_table(["load", "value"], rows, left=2, cls="loads"))
     return "\n".join(out)
 
 
@@ -353,21 +124,21 @@ def _verdict(a: Analysis, fos: FactorOfSafety | None) -> str:
         if a.stable
         else f"UNSTABLE: no equilibrium beyond load factor {a.load_factor:.3g} ({F})"
     )
-    parts = [f'<div class="verdict {cls}" id="verdict">{_esc(text)}</div>']
+    parts = [f'<div class="verdict {cls}" id="verdict">{esc(text)}</div>']
     if fos is not None:
         lo, hi = fos.bracket
         if fos.value is not None:
             parts.append(
                 f'<p class="fos" id="fos">Factor of safety F = {fos.value:.3f} '
-                f"(bracket {lo:.4f} - {_num(hi, '.4f')})</p>"
+                f"(bracket {lo:.4f} - {num(hi, '.4f')})</p>"
             )
         else:
             parts.append(
-                f'<p class="fos" id="fos">Factor of safety: none ({_esc(fos.mode)}), '
-                f"bracket {_num(lo, '.4g')} - {_num(hi, '.4g')}</p>"
+                f'<p class="fos" id="fos">Factor of safety: none ({esc(fos.mode)}), '
+                f"bracket {num(lo, '.4g')} - {num(hi, '.4g')}</p>"
             )
-        parts.append(f'<p class="note">{_esc(fos.definition)}; {len(fos.trials)} trials.</p>')
-    parts.append(f'<p class="note">Evidence of the last step: {_esc(a.evidence)}.</p>')
+        parts.append(f'<p class="note">{esc(fos.definition)}; {len(fos.trials)} trials.</p>')
+    parts.append(f'<p class="note">Evidence of the last step: {esc(a.evidence)}.</p>')
     return "\n".join(parts)
 
 
@@ -375,15 +146,15 @@ def _steps_table(a: Analysis) -> str:
     rows = [
         [
             int(s.stage),
-            _num(s.load_factor, ".3g"),
-            _num(s.strength_factor, ".5g"),
+            num(s.load_factor, ".3g"),
+            num(s.strength_factor, ".5g"),
             "yes" if s.converged else "no",
             int(s.n_failed_springs),
-            _esc(s.evidence),
+            esc(s.evidence),
         ]
         for s in a.steps
     ]
-    return _table(
+    return html_table(
         ["stage", "load factor", "F", "equilibrium", "failed springs", "evidence"],
         rows,
         cls="steps",
@@ -506,8 +277,8 @@ def write_report(
     ids = block_ids if block_ids is not None else n_free <= 60
 
     def fig(f, caption, alt, ident):
-        uri = _figure_uri(f, image_format, dpi)
-        return _img(uri, caption, alt, ident)
+        uri = figure_uri(f, image_format, dpi)
+        return img(uri, caption, alt, ident)
 
     pics = []
     pics.append(
@@ -523,7 +294,7 @@ def write_report(
     pics.append(
         fig(
             plots.plot_failure(a, unit=unit).figure,
-            f"Failure state at {F1}: {_state_counts(a)}. Each stretch of joint in its "
+            f"Failure state at {F1}: {state_counts(a)}. Each stretch of joint in its "
             "current state: red sliding, blue open, green dashed failed earlier and now "
             "closed (history, holding now), grey elastic; purple band: slip surface; orange: "
             "unstable blocks.",
@@ -555,7 +326,7 @@ def write_report(
         pics.append(
             fig(
                 plots.plot_failure(fos, unit=unit).figure,
-                f"Failure state at {where}: {_state_counts(failed)}.",
+                f"Failure state at {where}: {state_counts(failed)}.",
                 "failure state of the factor-of-safety search",
                 "fig-failure-fos",
             )
@@ -582,7 +353,7 @@ def write_report(
             fig(
                 f,
                 f"Normal stress (compression positive), shear stress and shear strength "
-                f"along {_esc(label)} at {at}; the strength is drawn at the same factor.",
+                f"along {esc(label)} at {at}; the strength is drawn at the same factor.",
                 f"stress along {label}",
                 f"fig-stress-{k}",
             )
@@ -612,7 +383,7 @@ def write_report(
         uri = "data:image/gif;base64," + base64.b64encode(gif.read_bytes()).decode("ascii")
         gif.unlink()
         prog.append(
-            _img(
+            img(
                 uri,
                 "Progressive failure, animated.",
                 "progressive failure animation",
@@ -622,8 +393,8 @@ def write_report(
     now = _dt.datetime.now().astimezone().isoformat(timespec="seconds")
     title = title or f"rockdem report: {model.name}"
     sections = [
-        f"<h1>{_esc(title)}</h1>",
-        f'<p class="meta">rockdem {_esc(__version__)} · {_esc(now)}</p>',
+        f"<h1>{esc(title)}</h1>",
+        f'<p class="meta">rockdem {esc(__version__)} · {esc(now)}</p>',
         '<nav><a href="#results">Verdict</a><a href="#tables">Failed joints</a>'
         '<a href="#trust">Trust</a>'
         + ('<a href="#limit-equilibrium">Limit equilibrium</a>' if fos is not None else "")
@@ -632,26 +403,26 @@ def write_report(
         '<a href="#inputs">Inputs</a></nav>',
         '<h2 id="results">Verdict</h2>',
         _verdict(a, fos),
-        _warnings(a, failed),
+        warnings_html(a, failed),
         '<h3 id="trust">How far to trust this</h3>',
-        "<ul>" + "".join(f"<li>{_esc(t)}</li>" for t in trust_statements(a, fos)) + "</ul>",
+        "<ul>" + "".join(f"<li>{esc(t)}</li>" for t in trust_statements(a, fos)) + "</ul>",
         '<h2 id="tables">Failed joints and unstable blocks</h2>',
         f"<h3>Joints at {F1}: state now and failure history</h3>",
-        f'<p class="states">{_esc(_state_counts(a))}.</p>',
-        _failed_table(a, stress_unit, max_rows, u),
+        f'<p class="states">{esc(state_counts(a))}.</p>',
+        failed_table(a, stress_unit, max_rows, u),
         f"<h3>Unstable blocks at {F1}</h3>",
-        _unstable_table(a, max_rows, u),
+        unstable_table(a, max_rows, u),
     ]
     if a.bolts is not None:
-        sections += [f"<h3>Bolts at {F1}</h3>", _bolts_table(a, u)]
+        sections += [f"<h3>Bolts at {F1}</h3>", bolts_table(a, u)]
     if failed is not None and failed is not a and not _same_state(a, failed):
         sections += [
             f"<h3>Joints at F = {format_factor(failed.strength_factor)} (failure): state now "
             "and failure history</h3>",
-            f'<p class="states">{_esc(_state_counts(failed))}.</p>',
-            _failed_table(failed, stress_unit, max_rows, u),
+            f'<p class="states">{esc(state_counts(failed))}.</p>',
+            failed_table(failed, stress_unit, max_rows, u),
             f"<h3>Unstable blocks at F = {format_factor(failed.strength_factor)} (failure)</h3>",
-            _unstable_table(failed, max_rows, u),
+            unstable_table(failed, max_rows, u),
         ]
     if fos is not None:
         from .limit_equilibrium.report import html_section as le_section
@@ -671,15 +442,15 @@ def write_report(
         '<h2 id="inputs">Model inputs</h2>',
         _inputs(model, system, units),
         "<hr>",
-        f'<p class="meta">Written by rockdem {_esc(__version__)} on {_esc(now)} '
-        f"(Python {_esc(platform.python_version())}). Stage numbers: load steps, then "
+        f'<p class="meta">Written by rockdem {esc(__version__)} on {esc(now)} '
+        f"(Python {esc(platform.python_version())}). Stage numbers: load steps, then "
         "strength-reduction trials.</p>",
     ]
     doc = (
         '<!DOCTYPE html>\n<html lang="en"><head><meta charset="utf-8">'
         '<meta name="viewport" content="width=device-width, initial-scale=1">'
-        f'<meta name="generator" content="rockdem {_esc(__version__)}">'
-        f"<title>{_esc(title)}</title><style>{_CSS}</style></head>\n<body>\n"
+        f'<meta name="generator" content="rockdem {esc(__version__)}">'
+        f"<title>{esc(title)}</title><style>{CSS}</style></head>\n<body>\n"
         + "\n".join(sections)
         + "\n</body></html>\n"
     )

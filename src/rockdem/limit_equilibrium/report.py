@@ -9,13 +9,13 @@ from .sarma import sarma
 def html_section(fos: FactorOfSafety) -> list[str]:
     """HTML fragments: Sarma's factor of the DEM's mechanism beside the DEM's,
     its faces, and where the two differ (or, plainly, why there is no factor)."""
-    from ..report import _esc, _num, _table
+    from ..report_html import esc, html_table, num
 
     head = '<h2 id="limit-equilibrium">Limit equilibrium beside the DEM</h2>'
     try:
         r = sarma(fos)
     except Exception as exc:  # the report must not fail for its cross-check
-        return [head, f"<p>Not available: {_esc(type(exc).__name__)}: {_esc(exc)}.</p>"]
+        return [head, f"<p>Not available: {esc(type(exc).__name__)}: {esc(exc)}.</p>"]
     intro = (
         "<p>The DEM's failure mechanism (the moving blocks at the upper end of the "
         "bracket, and their contacts) rated by Sarma's method (1979, non-vertical "
@@ -25,7 +25,7 @@ def html_section(fos: FactorOfSafety) -> list[str]:
         "(force equilibrium of each body).</p>"
     )
     if r.fos is None:
-        return [head, intro, f"<p><b>No limit-equilibrium factor:</b> {_esc(r.reason)}.</p>"]
+        return [head, intro, f"<p><b>No limit-equilibrium factor:</b> {esc(r.reason)}.</p>"]
     diff = "" if r.difference is None else f" ({signed_percent(r.difference)} against the DEM)"
     rows = [
         [
@@ -34,14 +34,14 @@ def html_section(fos: FactorOfSafety) -> list[str]:
             f.kind,
             f.state,
             ", ".join(f.joints),
-            _num(f.length),
-            _num(f.normal_force),
-            _num(f.shear_force),
-            _esc(", ".join(sorted(set(f.dem_state)))),
+            num(f.length),
+            num(f.normal_force),
+            num(f.shear_force),
+            esc(", ".join(sorted(set(f.dem_state)))),
         ]
         for i, f in enumerate(r.faces)
     ]
-    table = _table(
+    table = html_table(
         ["face", "bodies", "kind", "LE state", "joints", "length", "N", "S", "DEM now"],
         rows,
         left=5,
@@ -53,13 +53,13 @@ def html_section(fos: FactorOfSafety) -> list[str]:
     return [
         head,
         intro,
-        f"<p>DEM (strength reduction): <b>{_num(r.dem_fos, '.4f')}</b>; "
-        f"Sarma on the same blocks and slip surface: <b>{_num(r.fos, '.4f')}</b>{diff}; "
-        f"critical acceleration at full strength Kc = {_num(r.critical_acceleration, '.4f')} g."
-        f"</p><p>Rigid bodies: {_esc(bodies)}.</p>",
+        f"<p>DEM (strength reduction): <b>{num(r.dem_fos, '.4f')}</b>; "
+        f"Sarma on the same blocks and slip surface: <b>{num(r.fos, '.4f')}</b>{diff}; "
+        f"critical acceleration at full strength Kc = {num(r.critical_acceleration, '.4f')} g."
+        f"</p><p>Rigid bodies: {esc(bodies)}.</p>",
         table,
         "<p>Where the two differ:</p><ul>"
-        + "".join(f"<li>{_esc(n)}</li>" for n in r.notes)
+        + "".join(f"<li>{esc(n)}</li>" for n in r.notes)
         + "</ul>",
     ]
 

@@ -1,0 +1,169 @@
+"""The tables of an analysis in the HTML report: the state of the joints,
+the failed interfaces, the unstable blocks, the bolts, the warnings."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from . import plots
+from .modes import boundary_warnings, failure_modes
+from .report_html import esc, html_table, num
+from .results import Analysis, format_factor
+from .units import UNKNOWN, Units
+
+
+def state_counts(a: Analysis) -> str:
+    """Current state and failure history of the interfaces, kept apart."""
+    now = np.bincount(a.interfaces.current, minlength=4)
+    s = a.interfaces.state
+    return (
+        f"now {int(now[2])} sliding, {int(now[3])} open, {int(now[1])} failed earlier and "
+        f"now closed, {int(now[0])} elastic interfaces (history: {int((s > 0).sum())} have "
+        f"failed at some time, {int((s == 1).sum())} in shear, {int((s == 2).sum())} in "
+        "tension)"
+    )
+
+
+#: current state of a failed interface, in words (codes of rockdem.results.CURRENT_NAMES)
+_NOW = ("closed", "closed", "sliding", "open")
+
+
+def failed_table(a: Analysis, stress_unit: str, limit: int, u: Units = UNKNOWN) -> str:
+    """Every interface that has failed at some time (the history), with its state now."""
+    ir = a.interfaces
+    faces = a.system.interfaces
+    idx = np.flatnonzero(ir.state > 0)
+    if not idx.size:
+        return '<p class="note">No interface has failed.</p>'
+    slip = set(np.asarray(a.slip_surface).tolist())
+    rows = []
+    for i in idx[:limit]:
+        rows.append(
+            [
+                str(ir.kind[i]),
+                str(ir.state_name[i]),
+                _NOW[int(ir.current[i])],
+                int(i),
+                f"{int(ir.block_a[i])} / {int(ir.block_b[i])}",
+                f"({num(faces.start[i][0], '.3g')}, {num(faces.start[i][1], '.3g')}) - "
+                f"({num(faces.end[i][0], '.3g')}, {num(faces.end[i][1], '.3g')})",
+                num(ir.length[i], ".3g"),
+                num(100 * ir.failed_fraction[i], ".0f"),
+                num(ir.normal_stress[i], ".3g"),
+                num(ir.shear_stress[i], ".3g"),
+                int(ir.first_failure[i]),
+                "yes" if int(i) in slip else "",
+            ]
+        )
+    header = [
+        "joint",
+        "failed in",
+        "now",
+        "interface",
+        "blocks",
+        "from - to",
+        "length" + u.suffix("length"),
+        "failed %",
+        f"σ mean ({stress_unit})",
+        f"τ mean ({stress_unit})",
+        "first failed (stage)",
+        "slip surface",
+    ]
+    more = f'<p class="note">... and {idx.size - limit} more.</p>' if idx.size > limit else ""
+    listing = html_table(header, rows, left=3, cls="failed-joints") + more
+    if idx.size <= 15:
+        return listing
+    return (
+        f"<details><summary>{idx.size} interfaces that have failed at some time "
+        f"(click to show)</summary>{listing}</details>"
+    )
+
+
+def unstable_table(a: Analysis, limit: int, u: Units = UNKNOWN) -> str:
+    """The moving blocks with their failure mode (rockdem.modes) and mechanism motion."""
+    blocks = a.system.blocks
+    idx = np.flatnonzero(a.unstable)
+    if not idx.size:
+        return '<p class="note">No block moves (no failure mechanism).</p>'
+    rows = []
+    mech = plots.oriented_mechanism(a)
+    modes = failure_modes(a)
+    for i in idx[:limit]:
+        ux, uy, rot = mech[i]
+        px, py = modes.pivot[i]
+        rows.append(
+            [
+                int(blocks.ids[i]),
+                str(modes.name[i]),
+                f"({num(px, '.4g')}, {num(py, '.4g')})" if np.isfinite(px) else "",
+                num(blocks.area[i], ".4g"),
+                num(blocks.weight[i], ".4g"),
+                f"({num(blocks.centroid[i][0], '.4g')}, {num(blocks.centroid[i][1], '.4g')})",
+                num(ux, ".3f"),
+                num(uy, ".3f"),
+                num(rot, ".3g"),
+            ]
+        )
+    header = [
+        "block",
+        "failure mode",
+        "pivot",
+        "area" + u.suffix("area"),
+        "weight" + u.suffix("force"),
+        "centroid",
+        "mech. ux",
+        "mech. uy",
+        "mech. rot",
+    ]
+    more = f'<p class="note">... and {idx.size - limit} more.</p>' if idx.size > limit else ""
+    counts = ", ".join(f"{n} {m}" for m, n in modes.counts().items() if n and m != "stable")
+    lead = f'<p class="modes">Failure modes: {esc(counts)}.</p>'
+    return lead + html_table(header, rows, left=2, cls="unstable-blocks") + more
+
+
+def bolts_table(a: Analysis, u: Units = UNKNOWN) -> str:
+    """Every joint a bolt crosses: force per bolt, capacity there, utilisation."""
+    r = a.bolts
+    if r is None:
+        return ""
+    use = r.utilisation
+    rows = [
+        [
+            str(r.name[k]),
+            num(r.depth[k], ".3g"),
+            f"({num(r.point[k, 0], '.4g')}, {num(r.point[k, 1], '.4g')})",
+            num(r.axial_force[k], ".4g"),
+            num(r.shear_force[k], ".4g"),
+            num(r.capacity[k], ".4g"),
+            f"{100 * use[k]:.0f}%",
+            "yes" if r.yielded[k] else "",
+        ]
+        for k in np.argsort(-use, kind="stable")
+    ]
+    header = [
+        "bolt",
+        "depth" + u.suffix("length"),
+        "at joint",
+        "axial force" + u.suffix("force"),
+        "shear force" + u.suffix("force"),
+        "capacity" + u.suffix("force"),
+        "utilisation",
+        "yielded",
+    ]
+    note = (
+        '<p class="note">Force per bolt where it crosses each joint (tension positive), '
+        "most used first; capacity is the steel's or the grout bond's beyond the joint.</p>"
+    )
+    return note + html_table(header, rows, left=3, cls="bolts")
+
+
+def warnings_html(*analyses: Analysis | None) -> str:
+    """A warning box per side of the model the mechanism reaches (rockdem.modes)."""
+    shown: dict[str, str] = {}  # message -> the factor of the first state that gave it
+    for a in analyses:
+        for text in boundary_warnings(a) if a is not None else ():
+            shown.setdefault(text, format_factor(a.strength_factor))
+    return "".join(
+        f'<div class="warning">Warning (mechanism at F = {F}): {esc(t)}.</div>'
+        for t, F in shown.items()
+    )
