@@ -303,7 +303,7 @@ def test_the_load_step_a_bolt_first_yields_is_recorded(tmp_path):
     at load factor 3 / 4.36 = 0.69, in load step 4 of 5; the strong one
     holds.  The bolt table (bolts.csv) carries the step."""
 
-    from rockdem.output import analysis_tables
+    from rockdem.result_tables import analysis_tables
 
     model = block_with_bolt(30.0, capacity=3.0, name="weak")
     strong = Bolt(**{**model.bolts[0].__dict__, "capacity": 30.0, "name": "strong"})

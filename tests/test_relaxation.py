@@ -155,7 +155,7 @@ def test_slip_surface_as_ordered_polylines():
     every slip interface once, with stresses per segment (result JSON)."""
     from rockdem.config import load_model
     from rockdem.examples import example_path
-    from rockdem.output import analysis_summary
+    from rockdem.result_tables import analysis_summary
 
     a = rd.analyse(load_model(example_path("inclined-layers"))[0])
     lines = analysis_summary(a)["slip_polylines"]

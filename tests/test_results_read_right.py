@@ -203,7 +203,8 @@ def test_joints_failed_in_tension_and_closed_again_are_history_not_open(bedded):
 def test_tables_and_csv_keep_the_current_state_apart_from_the_history(bedded, tmp_path):
     import csv
 
-    from rockdem.output import analysis_summary, analysis_tables, write_results
+    from rockdem.output import write_results
+    from rockdem.result_tables import analysis_summary, analysis_tables
 
     _, a = bedded
     summary = analysis_summary(a)
@@ -431,7 +432,7 @@ analysis:
 
 
 def test_slivers_at_the_back_boundary_are_warned_about(tmp_path):
-    from rockdem.output import fos_summary
+    from rockdem.result_tables import fos_summary
 
     path = tmp_path / "slivers.yaml"
     path.write_text(SLIVER_TOPPLING_YAML)
@@ -657,7 +658,8 @@ def test_result_csv_headings_carry_the_models_units(tmp_path):
 def test_result_csv_headings_stay_bare_without_a_unit_system(tmp_path):
     import csv
 
-    from rockdem.output import analysis_tables, write_results
+    from rockdem.output import write_results
+    from rockdem.result_tables import analysis_tables
     from rockdem.units import parse_units
 
     a = rd.analyse(plane_model(20, 35, 1.0, 1.0))

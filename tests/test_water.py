@@ -140,7 +140,8 @@ def test_pore_pressure_in_the_result_files(tmp_path):
     effective normal stress: gamma_w z_w at the crack's foot."""
     import csv
 
-    from rockdem.output import analysis_summary, analysis_tables, write_results
+    from rockdem.output import write_results
+    from rockdem.result_tables import analysis_summary, analysis_tables
 
     model, _ = _section(FULL)
     a = rd.analyse(model)

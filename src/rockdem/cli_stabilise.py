@@ -159,7 +159,8 @@ def write(folder: Path, result, doc: dict[str, Any], units=None) -> list[Path]:
     import csv
     import json
 
-    from .output import column_units, csv_header, jsonable, staged_folder
+    from .output import column_units, csv_header, staged_folder
+    from .result_tables import jsonable
     from .stabilisation import save_pictures
 
     with staged_folder(folder) as tmp:  # all or nothing

@@ -80,7 +80,8 @@ def run(
     """
     with _guard(debug):
         from ..analysis import analyse
-        from ..output import analysis_summary, check_output_dir
+        from ..output import check_output_dir
+        from ..result_tables import analysis_summary
 
         # the progress hooks are looked up on the package at call time, so that
         # rockdem.cli._step_hook and rockdem.cli._trial_hook stay patchable
@@ -125,7 +126,8 @@ def _write(
     formats: tuple[str, ...] = (),
     units_note: str = "",
 ):
-    from ..output import analysis_tables, write_results
+    from ..output import write_results
+    from ..result_tables import analysis_tables
 
     tables = analysis_tables(analysis, modes)
     extra: dict[str, Any] = {}
@@ -293,7 +295,8 @@ def fos(
     """
     with _guard(debug):
         from ..analysis import factor_of_safety
-        from ..output import check_output_dir, fos_summary
+        from ..output import check_output_dir
+        from ..result_tables import fos_summary
 
         # the progress hooks are looked up on the package at call time, so that
         # rockdem.cli._step_hook and rockdem.cli._trial_hook stay patchable
@@ -311,7 +314,7 @@ def fos(
         if out_dir is not None:
             state = result.stable_analysis or result.failed_analysis
             from ..modes import failure_modes
-            from ..output import analysis_summary
+            from ..result_tables import analysis_summary
 
             extra = {"analysis": analysis_summary(state), "model": cfg.model_dump(mode="json")}
             # the tables describe the last equilibrium; failure_mode is the limit's

@@ -279,7 +279,7 @@ def _progress(quiet: bool, label: str) -> Iterator[Progress]:
 
 
 def _echo_json(data: dict[str, Any]) -> None:
-    from ..output import jsonable
+    from ..result_tables import jsonable
 
     typer.echo(json.dumps(jsonable(data), indent=1, allow_nan=False))
 

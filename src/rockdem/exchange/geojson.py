@@ -57,12 +57,12 @@ def section_features(model, analysis=None, tables=None, *, units: str = "") -> d
     analysis : rockdem.Analysis, optional
         The state the ``tables`` describe (its blocks and interfaces).
     tables : dict, optional
-        :func:`rockdem.output.analysis_tables` of ``analysis``.
+        :func:`rockdem.result_tables.analysis_tables` of ``analysis``.
     units : str
         The model's ``units`` note (recorded in the collection).
     """
     from .. import __version__
-    from ..output import jsonable
+    from ..result_tables import jsonable
 
     blocks = analysis.system.blocks if analysis is not None else model.blocks
     features: list[dict[str, Any]] = []

@@ -68,7 +68,7 @@ def write_vtk(folder: str | Path, analysis, tables: dict[str, list[dict[str, Any
     analysis : rockdem.Analysis
         The state the tables describe (its geometry is used).
     tables : dict
-        :func:`rockdem.output.analysis_tables` of it (the fields are the
+        :func:`rockdem.result_tables.analysis_tables` of it (the fields are the
         tables' columns, so the files agree with the CSV files).
     """
     import meshio
