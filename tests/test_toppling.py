@@ -133,15 +133,31 @@ def test_dem_limit_state_has_the_classic_pattern(limit):
         assert faces.normal_force[k] < 1e-6 * GAMMA * DX * 40
 
 
+@pytest.mark.parametrize("grow", [1.3, 1.5, 2.0])
+def test_failure_modes_show_the_classic_toppling_pattern(grow):
+    """Goodman & Bray's staircase (Goodman & Bray 1976; Wyllie & Mah 2004,
+    ch. 9): the toe blocks slide, a middle group topples, the upper blocks
+    stand, for three trial schedules.  The modes are read at the limit: the
+    mechanism 2% beyond it slips the toppling blocks' toe corners by ~5% of
+    their speed (read from the motion alone: 4-7 "slides and topples", 13
+    "slides"), but at the last equilibrium their bases are open behind the
+    toe with the friction not exhausted (test_dem_limit_state_has_the_
+    classic_pattern).  Block 4 slides in the DEM where the LE has it topple
+    (see test_dem_limiting_friction_is_goodman_and_brays)."""
+    limit = rd.factor_of_safety(staircase(), grow=grow, width=0.002)
+    modes = failure_modes(limit.failed_analysis)
+    names = dict(zip(modes.ids.tolist(), modes.name.tolist(), strict=True))
+    assert [n for n in range(1, 17) if names[n] == "slides"] == [1, 2, 3, 4]
+    assert [n for n in range(1, 17) if names[n] == "topples"] == list(range(5, 14))
+    assert [n for n in range(1, 17) if names[n] == "stable"] == [14, 15, 16]
+
+
 @pytest.mark.xfail(
     strict=True,
-    reason="measured (width 0.002, grow 1.5): 1-4 slides, 5, 6 and 8 slides and topples, "
-    "7 and 13 slides, 9-12 topples, 14-16 stable.  Over six schedules (grow 1.3/1.5/2.0, "
-    "width 0.002-0.01) the unstable set is always 1-13 but the label of blocks 2-13 changes "
-    "from run to run: the relaxation mechanism (a run 2% beyond the bracket, relaxation.py/"
-    "mechanism.py) slips the toe corners by about modes.MOTION_TOL = 5% of the block speed, "
-    "although at the limit the bases of 5-13 carry under 95% of their friction "
-    "(test_dem_limit_state_has_the_classic_pattern)",
+    reason="the DEM's block 4 slides on its base at the limit (1-4 slide, 5-13 topple, "
+    "14-16 stand: test_failure_modes_show_the_classic_toppling_pattern); Goodman & Bray's "
+    "limit equilibrium, with the forces at the block corners, has it topple "
+    "(test_dem_limiting_friction_is_goodman_and_brays)",
 )
 def test_dem_mechanism_is_goodman_and_brays_classes(limit):
     """Goodman & Bray's classes exactly: 1-3 slide, 4-13 topple, 14-16 stand."""

@@ -436,6 +436,8 @@ def factor_of_safety(
                 continue
         hi_an = relaxation_mechanism(system, hi_an, run)
         break
+    if hi_an is not None:  # how the contacts stood as failure began
+        hi_an = replace(hi_an, limit_interfaces=lo_an.interfaces)
     return FactorOfSafety(
         0.5 * (lo + hi), (lo, hi), "strength", tuple(trials), lo_an, hi_an, _DEFINITION
     )

@@ -18,7 +18,11 @@ The base is the contact the loads press the group onto (its outward normal
 has the largest component along the resultant load on the group).  These are
 the kinematic modes of a block on a plane in Goodman & Bray (1976) and
 Wyllie & Mah (2004, ch. 9), read here from the computed motion, not from
-the geometry.
+the geometry.  Where the analysis is the failed end of a factor-of-safety
+search, the base as it stood at the last equilibrium before the limit
+(``Analysis.limit_interfaces``) decides between sliding and toppling: the
+motion is that of a run a little beyond the limit, where toppling columns'
+toe corners also slip a little (see :func:`_at_the_limit`).
 
 :func:`boundary_contacts` finds where the moving blocks touch a fixed block
 that backs the model's outer boundary (the back, the base or the front of
@@ -165,18 +169,24 @@ def failure_modes(a) -> BlockModes:
     groups = np.unique(label[moving])
     group[moving] = np.searchsorted(groups, label[moving])
     load = np.asarray(getattr(system, "f_block", np.zeros((n, 3))))[:, :2]
-    g_code, g_pivot = _group_modes(group, len(groups), A, B, faces, opening, slip, scale, load)
+    limit = getattr(a, "limit_interfaces", None)
+    g_code, g_pivot = _group_modes(
+        group, len(groups), A, B, faces, opening, slip, scale, load, limit
+    )
     code[moving] = g_code[group[moving]]
     pivot[moving] = g_pivot[group[moving]]
     return BlockModes(code, group, pivot, blocks.ids)
 
 
-def _group_modes(group, n_groups, A, B, faces, opening, slip, scale, load):
+def _group_modes(group, n_groups, A, B, faces, opening, slip, scale, load, limit=None):
     """Mode code and pivot of every rigid group, from its contacts with the rest.
 
     Each contact between a group and anything outside it is one row, seen
     from the group (outward normal, slip of the group); the rules of the
-    module docstring are per-group reductions over these rows.
+    module docstring are per-group reductions over these rows.  ``limit``:
+    the interfaces at the last equilibrium before the limit, which decide
+    between sliding and toppling where the group stood on its base there
+    (see :func:`_at_the_limit`).
     """
     G = n_groups
     ga, gb = group[A], group[B]
@@ -222,8 +232,67 @@ def _group_modes(group, n_groups, A, B, faces, opening, slip, scale, load):
         FALLS,
         np.where(slides, SLIDES, np.where(least <= tol, TOPPLES, SLIDES_AND_TOPPLES)),
     )
-    pivot[falls | slides] = np.nan
+    if limit is not None:
+        main = base & (press >= lean[g] - MAIN_BASE_COS)  # its base proper, not a side
+        code = _at_the_limit(code, g, rows, main, G, faces, limit)
+        # a group read as toppling from the limit although its motion slid
+        # flat: it turns about the corner of its base that stayed closed
+        turns = (code == TOPPLES) | (code == SLIDES_AND_TOPPLES)
+        flat = np.flatnonzero(np.isnan(pivot[:, 0]) & turns)
+        if flat.size:
+            on = main & np.isin(g, flat)
+            corner = opening[rows].argmin(1)
+            for k in np.flatnonzero(on)[np.argsort(-faces.length[rows[on]], kind="stable")]:
+                if np.isnan(pivot[g[k], 0]):
+                    ends = (faces.start[rows[k]], faces.end[rows[k]])
+                    pivot[g[k]] = ends[corner[k]]
+    pivot[(code == FALLS) | (code == SLIDES)] = np.nan
     return code, pivot
+
+
+#: The contacts of a group's base proper: within this (cosine) of the one it
+#: leans on most (a side face of a column on a steep base can also count as
+#: base, see BASE_COS)
+MAIN_BASE_COS = 0.05
+#: At the limit a group stood on a corner where at least this share of its
+#: base was open ...
+LIFTED = 0.5
+#: ... and it slipped on its base where this share of the closed part was at
+#: its shear strength
+SLIPPING = 0.99
+
+
+def _at_the_limit(code, g, rows, base, n_groups, faces, limit):
+    """Sliding or toppling as the contacts stood at the last equilibrium.
+
+    The mechanism is a run of the blocks a little beyond the limit: there a
+    toppling column's toe corner also slips a little (in Goodman & Bray's
+    staircase by ~5% of the block speed although its base friction was not
+    exhausted), which the motion alone reads as sliding.  At the limit the
+    base says which: closed and at its strength, the group slides; open
+    over half its length with the closed part below its strength, it
+    topples, as Goodman & Bray's limit equilibrium classes the blocks; open
+    over half its length with the closed corner at its strength, it slides
+    and topples, unless its motion turns about that corner without slipping
+    (then it topples).  Other groups (falling, or on a base that holds) keep
+    the mode of their motion.
+    """
+    length = faces.length[rows] * base
+    opened = length * np.asarray(limit.open_fraction)[rows]
+    slid = length * np.asarray(limit.sliding_fraction)[rows]
+    total = np.bincount(g, length, n_groups)
+    open_len = np.bincount(g, opened, n_groups)
+    closed = total - open_len
+    slipping = (closed > 0) & (np.bincount(g, slid, n_groups) >= SLIPPING * closed)
+    lifted = (total > 0) & (open_len >= LIFTED * total)
+    moving = code != FALLS
+    out = code.copy()
+    out[moving & slipping & ~lifted] = SLIDES
+    # on a corner at its strength: it topples and slides unless its motion
+    # turns about that corner without slipping
+    out[moving & slipping & lifted & (code != TOPPLES)] = SLIDES_AND_TOPPLES
+    out[moving & ~slipping & lifted] = TOPPLES
+    return out
 
 
 # ----------------------------------------------------------- model boundary

@@ -195,6 +195,11 @@ class Analysis:
         Blocks that move in the failure mechanism.
     slip_surface : ndarray of int
         Interfaces (positions) that have failed and bound the moving blocks.
+    limit_interfaces : InterfaceResults or None
+        For the failed end of a factor-of-safety search: the interfaces at
+        the last equilibrium before the limit (which contacts were open or
+        at their strength as failure began; :func:`rockdem.modes.failure_modes`
+        reads the blocks' modes from them).
     """
 
     system: System
@@ -209,6 +214,7 @@ class Analysis:
     slip_surface: np.ndarray
     steps: tuple[Step, ...]
     state: SpringState = field(repr=False)
+    limit_interfaces: InterfaceResults | None = field(default=None, repr=False)
 
     @property
     def unstable_blocks(self) -> np.ndarray:
