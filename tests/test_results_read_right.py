@@ -666,3 +666,34 @@ def test_result_csv_headings_stay_bare_without_a_unit_system(tmp_path):
     write_results(tmp_path / "r", analysis_tables(a), {}, units=parse_units("consistent"))
     with (tmp_path / "r" / "blocks.csv").open() as fh:
         assert "area" in next(csv.reader(fh))
+
+
+def test_a_staged_failure_reads_its_modes_at_the_last_load_carried():
+    """A 2 x 1 block on a 35 degree plane (phi 20, brittle c = 5 kPa over its
+    2 m base: Hoek & Bray's plane failure, FS = (c A + W cos tan phi) /
+    (W sin) = 1.10 at 60% of the load, 0.95 at 80%, 0.68 with the cohesion
+    lost) carries some of its five load steps and fails before the full
+    load.  Its failed analysis keeps the interfaces at the last load
+    carried, where the block stood on its base and carried its weight, and
+    the block slides."""
+    from rockdem import verification as V
+    from rockdem.modes import failure_modes
+
+    joint = rd.Joint(normal_stiffness=1e6, friction_angle=20, cohesion=5.0)
+    model = V.block_on_plane(35, joint, settings=rd.Settings(load_steps=5))
+    weight, length = 2.0 * 1.0 * 25.0, 2.0
+    fs = [
+        V.sliding_fos(35, 20, cohesion=5.0, length=length, weight=lam * weight)
+        for lam in (0.6, 0.8)
+    ]
+    assert fs[0] > 1.0 > fs[1]
+    a = rd.analyse(model)
+    assert not a.stable
+    assert 0.0 < a.load_factor < 0.8
+    limit = a.limit_interfaces
+    assert limit is not None
+    base = int(np.argmax(limit.length))
+    assert limit.open_fraction[base] < 0.5  # on its base, not on a corner
+    normal = a.load_factor * weight * np.cos(np.radians(35))
+    assert limit.normal_force[base] == pytest.approx(normal, rel=1e-6)
+    assert failure_modes(a).blocks("slides").tolist() == [1]

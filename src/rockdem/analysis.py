@@ -268,7 +268,13 @@ def analyse(
             failed = _package(system, sol, state, lam_prev, strength_factor, False, steps, q)
             failed = prove_in_region(system, failed, state, strength_factor)
             failed, run = confirm_failed_analysis(system, failed, state, q, lam)
-            return relaxation_mechanism(system, failed, run)
+            failed = relaxation_mechanism(system, failed, run)
+            if lam_prev > 0:  # how the contacts stood at the last load carried
+                resp, _ = residual(system, q, state, lam_prev, strength_factor)
+                reduce = system.model.settings.reduce_tensile
+                _, carried = tabulate(system, state, resp, strength_factor, reduce)
+                failed = replace(failed, limit_interfaces=carried)
+            return failed
     return _package(system, sol, state, lam_prev, strength_factor, True, steps, q)
 
 

@@ -196,10 +196,12 @@ class Analysis:
     slip_surface : ndarray of int
         Interfaces (positions) that have failed and bound the moving blocks.
     limit_interfaces : InterfaceResults or None
-        For the failed end of a factor-of-safety search: the interfaces at
-        the last equilibrium before the limit (which contacts were open or
-        at their strength as failure began; :func:`rockdem.modes.failure_modes`
-        reads the blocks' modes from them).
+        For a failure: the interfaces at the last equilibrium before it (the
+        largest stable factor of a factor-of-safety search, or the last load
+        carried in a staged analysis; None when no load was carried): which
+        contacts were open or at their strength as failure began
+        (:func:`rockdem.modes.failure_modes` reads sliding or toppling from
+        them).
     """
 
     system: System
