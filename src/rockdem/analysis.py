@@ -24,7 +24,7 @@ from .model import Model
 from .relaxation import TOLERANCE as RELAXATION_TOLERANCE
 from .relaxation import confirm_failed_analysis, confirm_failed_trial
 from .results import Analysis, Evidence, FactorOfSafety, Step, Trial, tabulate
-from .solver import KINKED, Solve, System, build_system, residual
+from .solver import KINKED, Solve, System, build_system, newton, residual
 from .spring_law import SpringState, commit
 
 log = logging.getLogger(__name__)
@@ -43,19 +43,29 @@ PROGRESS_RESTARTS = 20
 
 
 def _settle(
-    system, state, q0, load_factor, factor, stage, base_factor=None, total=False, resolution=None
+    system,
+    state,
+    q0,
+    load_factor,
+    factor,
+    stage,
+    base_factor=None,
+    total=False,
+    resolution=None,
+    first: Solve | None = None,
 ):
     """Solve at one load level, re-solving while committed failures shed strength.
 
     Returns ``(solve, state)``; the state is committed only if the solve
     converged.  ``total=True`` keeps the plastic slip at zero (the shear
     spring follows the total relative displacement): used by the strength
-    trials, see :func:`factor_of_safety`.
+    trials, see :func:`factor_of_safety`.  ``first``: the first solve, when
+    it was found another way (an equilibrium of the dynamic relaxation).
     """
     tol = system.model.settings.tolerance
     scale = system.assembly.dof_scale
     f_norm = norm(load_factor * system.f_ext * scale)
-    sol = solve_equilibrium(
+    sol = first or solve_equilibrium(
         system,
         state,
         load_factor=load_factor,
@@ -268,6 +278,17 @@ def analyse(
             failed = _package(system, sol, state, lam_prev, strength_factor, False, steps, q)
             failed = prove_in_region(system, failed, state, strength_factor)
             failed, run = confirm_failed_analysis(system, failed, state, q, lam)
+            if run.status == "equilibrium" and not failed.evidence.certified:
+                # Newton stalled where the second method found equilibrium: a
+                # stall, not a verdict; go on from there
+                rescued, new_state = _from_relaxed(system, state, run.q, lam, strength_factor, k)
+                if rescued.converged:
+                    text = failed.evidence.relaxation
+                    ev = replace(_evidence(rescued), relaxation=text)
+                    n_failed = int((new_state.yielded | new_state.broken).sum())
+                    steps[-1] = Step(k, lam, strength_factor, True, ev, n_failed)
+                    sol, state, q, lam_prev = rescued, new_state, rescued.q, lam
+                    continue
             failed = relaxation_mechanism(system, failed, run)
             if lam_prev > 0:  # how the contacts stood at the last load carried
                 resp, _ = residual(system, q, state, lam_prev, strength_factor)
@@ -276,6 +297,20 @@ def analyse(
                 failed = replace(failed, limit_interfaces=carried)
             return failed
     return _package(system, sol, state, lam_prev, strength_factor, True, steps, q)
+
+
+def _from_relaxed(system, state, q, load_factor, factor, stage):
+    """Equilibrium at ``load_factor`` from a state the dynamic relaxation
+    brought within its tolerance: polished by Newton where it can be, else
+    taken as it is (:data:`~rockdem.continuation.RELAXED`), then settled
+    (committed, and re-solved while failures shed strength).  Returns
+    ``(solve, state)`` as :func:`_settle`."""
+    max_it = system.model.settings.max_iterations
+    first = newton(system, state, load_factor, factor, q, max_it)
+    if not first.converged:
+        resp, _ = residual(system, q, state, load_factor, factor)
+        first = Solve(True, q, resp, first.iterations, first.residuals, RELAXED, np.zeros_like(q))
+    return _settle(system, state, first.q, load_factor, factor, stage, first=first)
 
 
 def analyse_from(
