@@ -128,6 +128,27 @@ def test_a_device_is_refused_not_read(tmp_path):
     assert_refused(rockdem("check", "/dev/zero", cwd=tmp_path, timeout=20), "not a regular file")
 
 
+@pytest.mark.skipif(not hasattr(os, "mkfifo"), reason="no named pipes here")
+@pytest.mark.parametrize(
+    "args, target",
+    [
+        (["schema", "-o", "pipe.json", "--overwrite"], "pipe.json"),
+        (["plot", "m.yaml", "--what", "model", "-o", "pipe.png", "--overwrite"], "pipe.png"),
+        (["run", "m.yaml", "--out", "out", "--overwrite", "--quiet"], "out/blocks.csv"),
+    ],
+    ids=["schema", "plot", "run-folder"],
+)
+def test_an_output_that_is_a_pipe_is_never_replaced(tmp_path, args, target):
+    """Found by fuzzing: ``--out`` on a named pipe (or a device) with
+    ``--overwrite`` replaced it with a regular file (as root, /dev/full)."""
+    (tmp_path / "m.yaml").write_text(BOX, encoding="utf-8")
+    (tmp_path / "out").mkdir()
+    os.mkfifo(tmp_path / target)
+    assert_refused(inproc(*args, cwd=tmp_path), "not a regular file", target)
+    assert not (tmp_path / target).is_file()  # still the pipe
+    assert (tmp_path / target).exists()
+
+
 def test_a_folder_is_refused(tmp_path):
     (tmp_path / "model.yaml").mkdir()
     assert_refused(rockdem("check", "model.yaml", cwd=tmp_path), "model.yaml: is a folder")

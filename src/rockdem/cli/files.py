@@ -17,11 +17,29 @@ def _umask() -> int:
     return mask
 
 
+def _special(target: Path) -> bool:
+    """An existing path that is not a regular file or folder (a pipe, socket or
+    device): writing "over" it would replace it with a file."""
+    return target.exists() and not (target.is_file() or target.is_dir())
+
+
+def _refuse_special(target: Path, option: str) -> None:
+    from ..errors import InputError
+
+    if _special(target):
+        raise InputError(
+            f"{option} {target}",
+            "is not a regular file (a device, pipe or socket), so it is never replaced",
+            "give a file name",
+        )
+
+
 def _check_new_file(target: Path, option: str, overwrite: bool) -> None:
     from ..errors import InputError
 
     if target.is_dir():
         raise InputError(f"{option} {target}", "is a folder", "give a file name")
+    _refuse_special(target, option)
     if target.exists() and not overwrite:
         raise InputError(
             f"{option} {target}", "exists already", "use --overwrite to replace it, or another name"
@@ -134,6 +152,7 @@ def _check_out_folder(
                     f"would write {path.name} over the model file {source}",
                     "write the results into another folder",
                 )
+        _refuse_special(path, option)
         if path.is_dir():
             raise InputError(
                 where,
@@ -161,6 +180,7 @@ def _check_out_file(target: Path, *, inputs: list[Path], option: str = "--out") 
             )
     if target.is_dir():
         raise InputError(f"{option} {target}", "is a folder", "give a file name")
+    _refuse_special(target, option)
     if target.parent.exists():
         if not target.parent.is_dir():
             raise InputError(
