@@ -341,6 +341,12 @@ def _hostile(tmp_path: Path, case: str) -> Path:
         path.write_text(text[: len(text) // 2])
     elif case == "dwg":
         path.write_bytes(b"AC1027\x00\x00\x00\x00binary")
+    elif case == "comma-decimal":  # a coordinate written 20,5 (found by fuzzing)
+        lines = draw(tmp_path, "whole.dxf").read_text().splitlines()
+        at = lines.index("ENTITIES")
+        x = next(i for i in range(at, len(lines)) if lines[i].strip() == "10") + 1
+        lines[x] = "20,5"
+        path.write_text("\n".join(lines) + "\n")
     return path
 
 
@@ -358,6 +364,7 @@ HOSTILE = {
     "not-dxf": ("not a DXF file",),
     "truncated": ("incomplete", "EOF"),
     "dwg": ("DWG",),
+    "comma-decimal": ("structural errors", '"20,5"'),
 }
 
 
@@ -375,6 +382,23 @@ def test_a_hostile_drawing_gives_exit_2_and_one_line(tmp_path, case):
         *HOSTILE[case],
     )
     assert line.count("error:") == 1
+
+
+def test_a_repaired_number_is_one_line_in_a_child_process(tmp_path):
+    """ezdxf logs each number it repairs while reading; in a process of its
+    own (no test harness catching the log) the refusal is still one line."""
+    import subprocess
+    import sys
+
+    path = _hostile(tmp_path, "comma-decimal")
+    r = subprocess.run(
+        [sys.executable, "-m", "rockdem", "import", path.name],
+        cwd=tmp_path,
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    refused(r, "structural errors", '"20,5"')
 
 
 def test_missing_file_unknown_layer_and_unknown_joint(tmp_path):

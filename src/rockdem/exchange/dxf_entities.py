@@ -6,6 +6,7 @@ is built from them: :mod:`rockdem.exchange.dxf_in`."""
 from __future__ import annotations
 
 import io
+import logging
 import math
 import re
 from pathlib import Path
@@ -73,6 +74,11 @@ def _open(path: Path, source: str):
     import ezdxf
     from ezdxf import recover
 
+    # ezdxf logs every repair it makes while reading ("recovered invalid
+    # floating point value ..."); the auditor reports the same, and its first
+    # error is the one line said below
+    ezdxf_log = logging.getLogger("ezdxf")
+    was_disabled, ezdxf_log.disabled = ezdxf_log.disabled, True
     try:
         doc, auditor = recover.read(io.BytesIO(raw))
     except (ezdxf.DXFError, ValueError, IndexError, KeyError, TypeError, UnicodeError) as exc:
@@ -82,6 +88,8 @@ def _open(path: Path, source: str):
             f"is not a readable DXF file ({text})",
             "save or export the drawing as DXF from CAD again",
         ) from None
+    finally:
+        ezdxf_log.disabled = was_disabled
     if auditor.has_errors:
         first = auditor.errors[0].message if auditor.errors else ""
         raise _fail(
