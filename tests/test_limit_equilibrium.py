@@ -2,6 +2,7 @@
 worked examples, and Sarma's method on the DEM's own mechanism."""
 
 import json
+import re
 import subprocess
 import sys
 from dataclasses import replace
@@ -376,6 +377,32 @@ def test_le_runs_the_closed_form_a_case_file_names(tmp_path):
     assert "Goodman & Bray" in text and "sliding blocks (3): 1, 2, 3" in text
 
 
+def test_le_says_in_words_what_no_finite_number_can(tmp_path):
+    """Found by fuzzing.  Toppling with base friction 89.999 degrees: no
+    block can slide (tan phi_p tan phi_d >= 1), the toe needs no support at
+    any factor up to 100, and the bases of some blocks would carry tension
+    (the LE's forces are not admissible): said in words, with no inf, nan or
+    -8e16.  Hoek & Bray's plane failure whose bolt balances the driving
+    force: the factor of safety is unbounded, said so."""
+    (tmp_path / "topple.yaml").write_text(
+        TOPPLING_CASE.replace("base_friction: 38.15", "base_friction: 89.999")
+    )
+    r = _le("topple.yaml", cwd=tmp_path)
+    assert r.returncode == 0 and not r.stderr, r.stderr
+    assert "toe force P0: none needed" in r.stdout
+    assert "factor of safety: above 100" in r.stdout
+    assert "would carry tension (R < 0)" in r.stdout
+    assert not re.search(r"\b(inf|nan)\b|e\+1[0-9]", r.stdout), r.stdout
+    (tmp_path / "plane.yaml").write_text(
+        "limit_equilibrium:\n  plane_failure: {height: 30, face_angle: 60, plane_dip: 30, "
+        "friction_angle: 30, cohesion: 48, unit_weight: 25.5, water_unit_weight: 9.81, "
+        "crack_distance: 9, water_depth: 14.8, bolt_force: 7000, bolt_angle: 0}\n"
+    )
+    r = _le("plane.yaml", cwd=tmp_path)
+    assert r.returncode == 0 and not r.stderr, r.stderr
+    assert "factor of safety: unbounded" in r.stdout and "inf" not in r.stdout
+
+
 def test_le_on_a_model_sets_sarma_beside_the_dem(tmp_path):
     r = _le("--example", "wedge-verification", "--json", "--quiet", cwd=tmp_path)
     assert r.returncode == 0, r.stderr
@@ -411,6 +438,10 @@ def test_le_on_a_model_sets_sarma_beside_the_dem(tmp_path):
         (  # ran 53 s, then named `heights`
             TOPPLING_CASE.replace("n_blocks: 16", "n_blocks: 100000000"),
             "toppling.n_blocks: 1e+08 is out of range",
+        ),
+        (  # printed a numpy warning and nan (found by fuzzing)
+            TOPPLING_CASE.replace("base_friction: 38.15", "base_friction: 0"),
+            "toppling.base_friction: 0 is out of range; give a value > 0",
         ),
     ],
 )

@@ -9,6 +9,7 @@ section ``limit_equilibrium`` names a closed form: ``plane_failure``,
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 from typing import Any
 
@@ -100,6 +101,12 @@ def _num(x: float | None, fmt: str = ".4f") -> str:
     return "none" if x is None else format(x, fmt)
 
 
+def _finite(x: float | None, fmt: str) -> str:
+    """A force of the toppling table; "-" where none is defined (no finite
+    force holds a block)."""
+    return "-" if x is None or not math.isfinite(x) else format(x, fmt)
+
+
 def _print_sarma(doc: dict[str, Any], r, fos, units) -> None:
     out.print(f"[bold]{escape(doc['model_name'])}[/bold]  ({escape(doc['model_file'])})")
     if fos.value is not None:
@@ -167,7 +174,14 @@ def _print_case(doc: dict[str, Any]) -> None:
     r, case = doc["result"], doc["case"]
     if case == "plane_failure":
         out.print("plane failure with a tension crack (Hoek & Bray 1981)")
-        out.print(f"factor of safety: [bold]{r['fos']:.4f}[/bold]")
+        fs = r["fos"]
+        if not math.isfinite(fs):
+            out.print(
+                "factor of safety: unbounded (nothing drives the block down the plane: "
+                "the support force balances the driving force)"
+            )
+        else:
+            out.print(f"factor of safety: [bold]{fs:.4f}[/bold]")
         where = "the face" if r["crack_in_face"] else "the upper surface"
         out.print(f"tension crack depth z = {r['crack_depth']:.4g} (in {where})")
         out.print(
@@ -181,13 +195,24 @@ def _print_case(doc: dict[str, Any]) -> None:
         out.print(f"factor of safety: [bold]{r['fos']:.4f}[/bold]")
     else:
         out.print("toppling on a stepped base (Goodman & Bray 1976)")
-        need = "support needed" if r["support"] > 0 else "no support needed"
-        out.print(f"toe force P0 = {r['support']:.4g} ({need})")
+        p0 = r["support"]
+        if not math.isfinite(p0):
+            out.print(
+                "toe force P0: no finite force holds the toe block"
+                if p0 > 0
+                else "toe force P0: none needed (the toe block can neither topple nor slide)"
+            )
+        else:
+            need = "support needed" if p0 > 0 else "no support needed"
+            out.print(f"toe force P0 = {p0:.4g} ({need})")
         fs = r["fos"]
-        out.print(
-            "factor of safety: "
-            + ("none (friction cannot hold it)" if fs is None else f"[bold]{fs:.4f}[/bold]")
-        )
+        if fs is None:
+            text = "none (friction cannot hold it)"
+        elif not math.isfinite(fs):
+            text = "above 100 (the toe needs no support for any factor up to 100)"
+        else:
+            text = f"[bold]{fs:.4f}[/bold]"
+        out.print("factor of safety: " + text)
         for mode in ("stable", "toppling", "sliding"):
             ids = r[f"{mode}_blocks"]
             out.print(f"{mode} blocks ({len(ids)}): " + (_ids(ids) if ids else "none"))
@@ -211,9 +236,16 @@ def _print_case(doc: dict[str, Any]) -> None:
                 f"{row['weight']:.4g}",
                 _num(row["p_topple"], ".1f"),
                 _num(row["p_slide"], ".1f"),
-                f"{row['p_lower']:.1f}",
-                f"{row['normal']:.1f}",
-                f"{row['shear']:.1f}",
+                _finite(row["p_lower"], ".1f"),
+                _finite(row["normal"], ".1f"),
+                _finite(row["shear"], ".1f"),
                 row["mode"],
             )
         out.print(table)
+        tension = [row["block"] for row in r["blocks"] if row["normal"] < 0]
+        if tension:
+            out.print(
+                f"warning: the bases of blocks {_ids(tension)} would carry tension (R < 0): "
+                "Goodman & Bray's forces are not admissible there (too much friction on the "
+                "faces for these blocks); read the factor of safety with care"
+            )

@@ -340,7 +340,9 @@ def toppling(
     dx = check_number(where, "width", width, lo=0.0, open_lo=True)
     b = check_number(where, "step", step, lo=0.0)
     psi = np.radians(check_number(where, "base_dip", base_dip, lo=0.0, hi=90.0))
-    tp = np.tan(np.radians(check_number(where, "base_friction", base_friction, lo=0.0, hi=90.0)))
+    # the factor of safety divides tan(phi_p): zero friction has none
+    phi_p = check_number(where, "base_friction", base_friction, lo=0.0, hi=90.0, open_lo=True)
+    tp = np.tan(np.radians(phi_p))
     fd = base_friction if face_friction is None else face_friction
     td = np.tan(np.radians(check_number(where, "face_friction", fd, lo=0.0, hi=90.0)))
     gamma = check_number(where, "unit_weight", unit_weight, lo=0.0, open_lo=True)
@@ -375,10 +377,12 @@ def _toppling(y, dx, b, psi, tp, td, gamma) -> Toppling:
         p_low[i] = need if mode[i] != "stable" else 0.0
         P = max(need, 0.0)
     pushed = np.maximum(p_low, 0.0)  # the block below cannot pull
-    R = W * np.cos(psi) + (p_up - pushed) * td
-    S = W * np.sin(psi) + (p_up - pushed)
-    # the toe's need, signed (< 0: a margin), finite for the root search
-    support = max(p_t[0], p_s[0], -1e12 * float(W.sum()))
+    with np.errstate(invalid="ignore"):  # no finite force holds a block: R, S undefined (nan)
+        R = W * np.cos(psi) + (p_up - pushed) * td
+        S = W * np.sin(psi) + (p_up - pushed)
+    # the toe's need, signed (< 0: a margin; -inf: it can neither topple nor
+    # slide; inf: no finite force holds it)
+    support = max(p_t[0], p_s[0])
     return Toppling(y, W, M, L, p_up, p_t, p_s, p_low, R, S, tuple(mode), float(support))
 
 
@@ -412,8 +416,11 @@ def toppling_fos(
     tp = np.tan(np.radians(base_friction))
     td = np.tan(np.radians(base_friction if face_friction is None else face_friction))
 
-    def support(F: float) -> float:
-        return _toppling(y, width, step, psi, tp / F, td / F, unit_weight).support
+    big = 1e12 * float(result.weight.sum())
+
+    def support(F: float) -> float:  # finite for the root search
+        need = _toppling(y, width, step, psi, tp / F, td / F, unit_weight).support
+        return float(np.clip(need, -big, big))
 
     grid = np.geomspace(0.05, 100.0, 300)
     values = np.array([support(F) for F in grid])
