@@ -450,6 +450,10 @@ BAD = [
         {"inputs": {PHI: {"distribution": "lognormal", "mean": -1, "sd": 2}}},
         ["lognormal: mean = -1 must be > 0"],
     ),
+    (  # overflowed in the sampler: "the analysis failed: OverflowError" (fuzzing)
+        {"inputs": {PHI: {"distribution": "lognormal", "mean": 1, "sd": 1e200}}},
+        ["study.inputs.joints.plane.friction_angle", "sd / mean = 1e+200 is over 100"],
+    ),
     (
         {"inputs": {PHI: {"distribution": "normal", "mean": 95, "sd": 1}}},
         ["study inputs at their medians", "joints.plane.friction_angle: 95", "out of range"],

@@ -24,6 +24,9 @@ MAX_SAMPLES = 1_000_000
 #: Most points along one sweep axis.
 MAX_SWEEP_STEPS = 1_000
 
+#: Largest coefficient of variation (sd / mean) of a lognormal input.
+MAX_LOGNORMAL_COV = 100.0
+
 #: Parameters each distribution takes (all of them required).
 PARAMETERS: dict[str, tuple[str, ...]] = {
     "normal": ("mean", "sd"),
@@ -71,6 +74,13 @@ class InputSpec(_Section):
             raise ValueError(f"{d}: sd = {self.sd:g} must be > 0")
         if d == "lognormal" and not self.mean > 0:
             raise ValueError(f"lognormal: mean = {self.mean:g} must be > 0")
+        if d == "lognormal" and self.sd > MAX_LOGNORMAL_COV * self.mean:
+            # (sd / mean)^2 overflowed at sd = 1e200 (found by fuzzing)
+            raise ValueError(
+                f"lognormal: sd / mean = {self.sd / self.mean:.3g} is over "
+                f"{MAX_LOGNORMAL_COV:g} (its values would span more orders of magnitude "
+                "than a rock property does); give a smaller sd"
+            )
         if self.min is not None and not self.min < self.max:
             raise ValueError(f"{d}: min = {self.min:g} must be < max = {self.max:g}")
         if d == "triangular" and not self.min <= self.mode <= self.max:
