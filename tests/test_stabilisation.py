@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import re
 
 import numpy as np
 import pytest
@@ -82,6 +83,22 @@ def test_compare_measures_side_by_side():
     assert rows[0]["reaches_target"] is False and rows[1]["reaches_target"] is True
     assert rows[1]["support_force"] == pytest.approx(wedge_thrust(200, 75, 37, 27, 35, 30, 35),
                                                      rel=0.03)
+
+
+def test_the_largest_support_force_of_the_model_file_is_used():
+    """``stabilisation.support.largest`` caps the search (it was read, then
+    not passed on: found by fuzzing): the wedge's Eq. 7 thrust is out of
+    reach below it, and the note says up to where it looked."""
+    model = two_block_wedge(35, 30)
+    at = (10.0, -10 * np.tan(np.radians(27)) + 1.0)
+    exact = wedge_thrust(200, 75, 37, 27, 35, 30, 35)
+    c = compare_measures(
+        model, 1.0, support_at=at, support_angle=180, removal=False, support_largest=exact / 2
+    )
+    row = c.measures[1]
+    assert row.kind == "support" and not row.reached
+    bound = float(re.search(r"not reached up to ([0-9.e+]+)", row.note).group(1))
+    assert bound == pytest.approx(exact / 2, rel=0.005)  # the cap, as the note rounds it
 
 
 # -------------------------------------------------------------- stages

@@ -126,11 +126,11 @@ def support_force(
 
     if enough(0.0):
         return SupportSearch(0.0, at, angle, (0.0, 0.0), count, rate(model, width=width), model)
-    lo, hi = 0.0, 0.01 * total
+    lo, hi = 0.0, min(0.01 * total, largest)  # never a force above `largest`
     while not enough(hi):
-        lo, hi = hi, 2 * hi
-        if hi > largest:
-            return SupportSearch(None, at, angle, (lo, np.inf), count, None, None)
+        if hi >= largest:
+            return SupportSearch(None, at, angle, (hi, np.inf), count, None, None)
+        lo, hi = hi, min(2 * hi, largest)
     while hi - lo > rtol * hi:
         mid = 0.5 * (lo + hi)
         if enough(mid):
@@ -197,6 +197,7 @@ def compare_measures(
     support_at: Sequence[float] | None = None,
     support_angle: float = DEFAULT_ANGLE,
     support: bool = True,
+    support_largest: float | None = None,
     bolting: dict | None = None,
     removal: bool = True,
     max_removal: float = 0.3,
@@ -210,9 +211,9 @@ def compare_measures(
     ----------
     berm : list of (x, y), optional
         The new ground profile of the berm design (left to right).
-    support_at, support_angle :
-        Where and in which direction the support force acts (see
-        :func:`support_force`); ``support=False`` skips it.
+    support_at, support_angle, support_largest :
+        Where and in which direction the support force acts, and the largest
+        force tried (see :func:`support_force`); ``support=False`` skips it.
     bolting : dict, optional
         The bolt and its inclination for a bolt-pattern row
         (:func:`rockdem.stabilisation.bolting.bolt_pattern` keywords).
@@ -242,7 +243,12 @@ def compare_measures(
     if support:
         with _progress.stage("support force"):
             search = support_force(
-                model, target_fos, at=support_at, angle=support_angle, width=width
+                model,
+                target_fos,
+                at=support_at,
+                angle=support_angle,
+                largest=support_largest,
+                width=width,
             )
         at = f"({search.at[0]:.2f}, {search.at[1]:.2f})"
         if search.force is None:

@@ -173,6 +173,7 @@ def _study(model, cfg, target_fos, support, stages, width) -> Study:
         support=support,
         support_at=tuple(sup.at) if sup is not None and sup.at is not None else None,
         support_angle=sup.angle if sup is not None else 195.0,
+        support_largest=sup.largest if sup is not None else None,
         bolting=_bolting(spec.bolts),
         max_removal=spec.max_removal,
         max_rounds=spec.max_rounds,
