@@ -190,6 +190,20 @@ def test_cli_results_appear_all_or_nothing(app, tmp_path, monkeypatch):
     assert [p.name for p in tmp_path.iterdir()] == ["res"]  # no temporary folder left
 
 
+def test_cli_a_support_that_acts_on_no_block_names_the_file(app, tmp_path):
+    """Found by fuzzing: a support angle pulling out of the rock is known to
+    be wrong only once the mechanism fixes where the force acts; the error
+    names the model file with the key, on one line, exit 2."""
+    text = example_path("inclined-layers").read_text()
+    text = text.replace("stabilisation:\n", "stabilisation:\n  support: {angle: 90}\n", 1)
+    (tmp_path / "m.yaml").write_text(text)
+    r = CliRunner().invoke(app, ["stabilise", str(tmp_path / "m.yaml"), "--quiet"])
+    assert r.exit_code == 2, r.output
+    line = " ".join(r.output.split())
+    assert "m.yaml: stabilisation.support: the force at angle 90" in line
+    assert "does not act on any block" in line
+
+
 @pytest.mark.parametrize("target", ["0", "-1", "nan", "1e9"])
 def test_cli_bad_target_is_an_input_error(app, target):
     r = CliRunner().invoke(app, ["stabilise", "--example", "wedge-verification",

@@ -93,7 +93,16 @@ def stabilise(
             )
         units = parse_units(cfg.units)
         with _progress_line(quiet or json_) as note:
-            result = study(m, cfg, target_fos=target_fos, support=not no_support, progress=note)
+            try:
+                result = study(
+                    m, cfg, target_fos=target_fos, support=not no_support, progress=note
+                )
+            except InputError as exc:
+                if not exc.where.startswith("stabilisation."):
+                    raise
+                # a key of the model file found wrong only once the mechanism
+                # is known (where a support acts): name the file with it
+                raise InputError(f"{path}: {exc.where}", exc.problem, exc.fix) from None
         doc = {
             **_header(path, m, cfg),
             "unit_system": units_summary(units),
