@@ -236,6 +236,26 @@ def test_error_names_file_line_key_and_fix():
     assert isinstance(exc, rd.InputError)
 
 
+@pytest.mark.parametrize(
+    "old, new, expected",
+    [
+        (  # said "origin[0]: required key is missing; add `0:`" (1 more problem)
+            "origin: [0, 1]",
+            "origin: []",
+            "slope.joint_sets.bedding.origin: expected a point [x, y] with two numbers; "
+            "write [x, y]",
+        ),
+        ("origin: [0, 1]", "origin: [0]", "origin: expected a point [x, y] with two numbers"),
+    ],
+)
+def test_a_short_point_is_named_as_a_point(old, new, expected):
+    """Found by fuzzing: a point missing a coordinate was reported as a
+    missing key `0:`, twice."""
+    with pytest.raises(ModelFileError) as info:
+        parse_model(SLOPE.replace(old, new, 1), source="s.yaml")
+    assert expected in str(info.value) and "more problem" not in str(info.value)
+
+
 def test_error_counts_further_problems():
     text = BOX.replace("friction_angle: 30", "friction_angle: 95, cohesion: -1")
     with pytest.raises(ModelFileError, match=r"1 more problem in the file"):

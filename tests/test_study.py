@@ -476,6 +476,16 @@ BAD = [
         },
         ["either `inputs`", "not both"],
     ),
+    (  # said "has None items" (found by fuzzing)
+        {
+            "sweep": {
+                PHI: {"values": [30, 31]},
+                "joints.plane.cohesion": {"values": [0, 1]},
+                "loads.seismic_h": {"values": [0, 0.1]},
+            }
+        },
+        ["study.sweep", "has 3 items; give at most 2"],
+    ),
 ]
 
 

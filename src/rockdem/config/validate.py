@@ -139,6 +139,9 @@ def _describe(err: dict) -> tuple[Loc, str, str]:
         close = difflib.get_close_matches(str(loc[-1]), allowed, n=1, cutoff=0.6)
         fix = f"did you mean `{close[0]}`?" if close else f"allowed keys: {', '.join(allowed)}"
         return loc, "unknown key", fix
+    if kind == "missing" and loc and isinstance(loc[-1], int) and _is_point(loc[:-1]):
+        # a point with a coordinate missing (`origin: []`, a vertex `[x]`)
+        return loc[:-1], "expected a point [x, y] with two numbers", "write [x, y]"
     if kind == "missing":
         doc = _field_doc(loc)
         fix = f"add `{loc[-1]}:`" + (f" ({doc})" if doc else "")
@@ -180,7 +183,10 @@ def _describe(err: dict) -> tuple[Loc, str, str]:
             return loc, f"expected a point [x, y], got {_short(value)}", "write [x, y]"
         n = ctx.get("min_length") if kind == "too_short" else ctx.get("max_length")
         word = "at least" if kind == "too_short" else "at most"
-        return loc, f"has {ctx.get('actual_length')} items", f"give {word} {n}"
+        got = ctx.get("actual_length")
+        if got is None:  # pydantic stops counting a mapping at the first one too many
+            got = len(value) if hasattr(value, "__len__") else f"more than {n}"
+        return loc, f"has {got} items", f"give {word} {n}"
     if kind in ("value_error", "assertion_error"):
         msg = err["msg"].removeprefix("Value error, ")
         return loc, msg, "see `rockdem check --help` and docs/file-format.md"
@@ -209,8 +215,10 @@ def _from_validation(exc: ValidationError, source: str, nodes: Any) -> ModelFile
     errors.sort(key=lambda e: -len(e["loc"]))
     err = errors[0]
     loc, problem, fix = _describe(err)
-    if len(errors) > 1:
-        fix += f" ({len(errors) - 1} more problem{'s' if len(errors) > 2 else ''} in the file)"
+    # the same problem reported twice (both coordinates of a short point) is one
+    others = len({(d[0], d[1]) for d in map(_describe, errors)} - {(loc, problem)})
+    if others:
+        fix += f" ({others} more problem{'s' if others > 1 else ''} in the file)"
     return ModelFileError(source, _keypath(loc) or "(top level)", problem, fix, _line(nodes, loc))
 
 
