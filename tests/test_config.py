@@ -256,6 +256,18 @@ def test_a_short_point_is_named_as_a_point(old, new, expected):
     assert expected in str(info.value) and "more problem" not in str(info.value)
 
 
+def test_a_profile_key_is_named_by_its_path():
+    """Found by fuzzing: "slope: Profile.simple bench_height is missing" named
+    a function of the library, not the key of the file."""
+    text = SLOPE.replace("profile: {height: 6, face_angle: 60}", "profile: {height: 6, "
+                         "face_angle: 60, bench_width: 2}")
+    with pytest.raises(ModelFileError) as info:
+        parse_model(text, source="s.yaml")
+    assert info.value.key == "slope.profile.bench_height"
+    assert "is missing for a benched slope" in str(info.value)
+    assert "Profile" not in str(info.value)
+
+
 def test_error_counts_further_problems():
     text = BOX.replace("friction_angle: 30", "friction_angle: 95, cohesion: -1")
     with pytest.raises(ModelFileError, match=r"1 more problem in the file"):

@@ -422,8 +422,11 @@ def _from_engine(
     js = re.match(r"joint set '(.+?)'(?: (\w+))?$", where)
     jl = re.match(r"joint_lines (\d+)$", where)
     gs = re.match(r"generate_slope (\w+)$", where)  # an argument: the slope's key
+    pr = re.match(r"Profile\.simple (\w+)$", where)  # a key of slope.profile
     if gs and cfg.slope is not None:
         loc, label = ("slope", gs.group(1)), ""
+    elif pr and cfg.slope is not None:
+        loc, label = ("slope", "profile", pr.group(1)), ""
     elif j and j.group(1) in cfg.joints:
         loc, label = ("joints", j.group(1), j.group(2)), ""
     elif js and cfg.slope is not None and js.group(1) in cfg.slope.joint_sets:
