@@ -161,6 +161,13 @@ def test_a_block_of_too_many_vertices_is_refused_at_its_key(tmp_path):
     assert f"{MAX_VERTICES + 2:,} vertices" in line
 
 
+def test_a_file_name_with_a_line_break_stays_on_one_line(tmp_path):
+    """Found by fuzzing: a file name holding a newline split the error in two."""
+    name = "bad\nname.yaml"
+    (tmp_path / name).write_text("x", encoding="utf-8")
+    assert_refused(inproc("check", name, cwd=tmp_path), "bad\\nname.yaml")
+
+
 def test_a_folder_is_refused(tmp_path):
     (tmp_path / "model.yaml").mkdir()
     assert_refused(rockdem("check", "model.yaml", cwd=tmp_path), "model.yaml: is a folder")

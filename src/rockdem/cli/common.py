@@ -158,7 +158,7 @@ def _guard(debug: bool) -> Iterator[None]:
         if debug:
             raise
         text = str(exc) if isinstance(exc, InputError) else str(exc).splitlines()[0]
-        err.print(f"error: {escape(text)}")
+        err.print(f"error: {escape(_one_line(text))}")
         raise typer.Exit(EXIT_INPUT) from None
     except KeyboardInterrupt:
         err.print("interrupted")
@@ -166,8 +166,16 @@ def _guard(debug: bool) -> Iterator[None]:
     except Exception as exc:
         if debug:
             raise
-        err.print(f"error: {escape(_failure_text(exc))}")
+        err.print(f"error: {escape(_one_line(_failure_text(exc)))}")
         raise typer.Exit(EXIT_FAILED) from None
+
+
+def _one_line(text: str) -> str:
+    """``text`` on one line: line breaks and other control characters (in a
+    file name, say) written as escapes, as Python writes them in a string."""
+    if text.isprintable():
+        return text
+    return "".join(c if c.isprintable() else repr(c)[1:-1] for c in text)
 
 
 def _failure_text(exc: Exception) -> str:
