@@ -268,6 +268,15 @@ def test_a_profile_key_is_named_by_its_path():
     assert "Profile" not in str(info.value)
 
 
+def test_format_true_is_not_format_1():
+    """Found by fuzzing: `format: true` was read as format 1 (True == 1)."""
+    with pytest.raises(ModelFileError) as info:
+        parse_model("format: true\n" + BOX, source="s.yaml")
+    assert info.value.key == "format"
+    assert "true is not a format version; write `format: 1`" in str(info.value)
+    parse_model("format: 1\n" + BOX)
+
+
 def test_error_counts_further_problems():
     text = BOX.replace("friction_angle: 30", "friction_angle: 95, cohesion: -1")
     with pytest.raises(ModelFileError, match=r"1 more problem in the file"):

@@ -40,6 +40,13 @@ class ModelFile(_Section):
 
     format: Literal[1] = 1
     """Version of the file format."""
+
+    @field_validator("format", mode="before")
+    @classmethod
+    def _format_is_a_number(cls, v):
+        if isinstance(v, bool):  # `true` equals 1 in Python, not in a file (fuzzing)
+            raise PydanticCustomError("format_bool", f"{str(v).lower()} is not a format version")
+        return v
     name: str | None = None
     """Name of the model (default: the file name without suffix)."""
     description: str = ""

@@ -187,6 +187,8 @@ def _describe(err: dict) -> tuple[Loc, str, str]:
         if got is None:  # pydantic stops counting a mapping at the first one too many
             got = len(value) if hasattr(value, "__len__") else f"more than {n}"
         return loc, f"has {got} items", f"give {word} {n}"
+    if kind == "format_bool":
+        return loc, err["msg"], "write `format: 1` (or leave it out)"
     if kind in ("value_error", "assertion_error"):
         msg = err["msg"].removeprefix("Value error, ")
         return loc, msg, "see `rockdem check --help` and docs/file-format.md"
