@@ -55,6 +55,23 @@ def test_uniform_load_is_the_trapezoid_with_equal_ends():
     np.testing.assert_allclose(fa, fb, rtol=1e-12, atol=1e-12)
 
 
+def test_a_line_load_inside_a_block_is_refused():
+    """Found by fuzzing: a line load across the middle of a block (y = H / 2)
+    was taken, while one across open air was refused; a load acts on the
+    rock's surface (or a joint), so both are refused, each saying why."""
+    blocks = two_blocks()
+    inside = rd.LineLoad((0.2, H / 2), (1.8, H / 2), 0.0, -10.0, name="buried")
+    with pytest.raises(rd.InputError, match="buried: lies inside a block, not on its boundary"):
+        block_loads(blocks, rd.Loads(gravity=False, lines=(inside,)))
+    above = rd.LineLoad((0.0, H + 1), (B, H + 1), 0.0, -10.0, name="in the air")
+    with pytest.raises(rd.InputError, match="does not lie on block boundaries"):
+        block_loads(blocks, rd.Loads(gravity=False, lines=(above,)))
+    # on the surface, and on the joint between the blocks (pushing sideways)
+    block_loads(blocks, rd.Loads(gravity=False, lines=(rd.LineLoad((0, H), (B, H), 0, -10),)))
+    joint = rd.LineLoad((B / 2, 0.1), (B / 2, H - 0.1), 10.0, 0.0)
+    block_loads(blocks, rd.Loads(gravity=False, lines=(joint,)))
+
+
 def test_a_trapezoid_in_a_model_file(tmp_path):
     from rockdem.config import parse_model
 

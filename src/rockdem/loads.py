@@ -107,6 +107,13 @@ def _split_line_loads(blocks: Blocks, loads: Loads):
             raise InputError(
                 name, "does not lie on block boundaries all along", "move it onto the surface"
             )
+        if _on_boundaries(polys, tree, p0, p1, blocks.tolerance) < 0.999 * length:
+            # inside the rock all along the side it pushes: a buried line (fuzzing)
+            raise InputError(
+                name,
+                "lies inside a block, not on its boundary",
+                "move it onto the surface of the rock (or onto a joint)",
+            )
         for g in _GAUSS_T:
             at = shapely.get_coordinates(
                 shapely.line_interpolate_point(pieces[ok], g, normalized=True)
@@ -116,6 +123,16 @@ def _split_line_loads(blocks: Blocks, loads: Loads):
             forces.append(0.5 * lengths[ok][:, None] * line.traction(along))
             names += [name] * int(ok.sum())
     return np.concatenate(xy), np.concatenate(forces), names
+
+
+def _on_boundaries(polys, tree, p0, p1, tol: float) -> float:
+    """Length of the segment ``p0 p1`` that lies on block boundaries (within ``tol``)."""
+    seg = shapely.LineString([p0, p1])
+    near = polys[tree.query(seg, predicate="dwithin", distance=2 * tol)]
+    if not len(near):
+        return 0.0
+    band = shapely.union_all(shapely.buffer(shapely.boundary(near), 2 * tol))
+    return float(shapely.length(shapely.intersection(seg, band)))
 
 
 def joint_water(blocks: Blocks, loads: Loads) -> Loads:
