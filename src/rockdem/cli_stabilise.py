@@ -31,8 +31,6 @@ def stabilise(
         typer.Option(
             "--target-fos",
             "-t",
-            min=0.0,
-            max=20.0,
             help="Factor of safety to reach, 0 < F <= 20 "
             "(default: stabilisation.target_fos of the file, else 1.3).",
         ),
