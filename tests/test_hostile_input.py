@@ -168,6 +168,20 @@ def test_a_file_name_with_a_line_break_stays_on_one_line(tmp_path):
     assert_refused(inproc("check", name, cwd=tmp_path), "bad\\nname.yaml")
 
 
+def test_a_block_below_the_tolerance_is_called_small_not_zero_area(tmp_path):
+    """Found by fuzzing: a 1 mm block beside a ground block 14,000 km wide
+    (the tolerance is 1e-8 of the extent, 0.14 m) was said to have zero area."""
+    text = BOX.replace(
+        "[[-5, -1], [5, -1], [5, 0], [-5, 0]]", "[[-7e6, -1], [7e6, -1], [7e6, 0], [-7e6, 0]]"
+    )
+    text = text.replace(
+        "[[0, 0], [2, 0], [2, 1], [0, 1]]", "[[0, 0], [0.001, 0], [0.001, 0.001], [0, 0.001]]"
+    )
+    assert_refused(
+        check(tmp_path, text), "blocks[1]", "smaller than the model's geometric tolerance"
+    )
+
+
 def test_a_folder_is_refused(tmp_path):
     (tmp_path / "model.yaml").mkdir()
     assert_refused(rockdem("check", "model.yaml", cwd=tmp_path), "model.yaml: is a folder")
@@ -676,8 +690,9 @@ def test_control_characters_in_keys_names_and_text_are_refused(tmp_path, old, ne
 def test_plot_options_out_of_range_are_input_errors(tmp_path, option, value, fragment):
     """--dpi 20000 ran out of memory (exit 1); --magnification inf hit a math domain error."""
     what = "mechanism" if option == "--magnification" else "model"
-    r = inproc("plot", "-e", "wedge-verification", "-w", what, "-o", "p.png", option, value,
-               cwd=tmp_path)
+    r = inproc(
+        "plot", "-e", "wedge-verification", "-w", what, "-o", "p.png", option, value, cwd=tmp_path
+    )
     assert_refused(r, option, fragment)
     assert not (tmp_path / "p.png").exists()
 
@@ -688,8 +703,18 @@ def test_a_scheduler_that_is_no_address_is_refused_before_anything_is_written(tm
         "study: {samples: 2, inputs: {joints.lower.friction_angle: "
         "{distribution: normal, mean: 30, sd: 2}}}\n"
     )
-    r = inproc("study", "-e", "wedge-verification", "--spec", "spec.yaml", "--out", "o",
-               "--scheduler", address, cwd=tmp_path)
+    r = inproc(
+        "study",
+        "-e",
+        "wedge-verification",
+        "--spec",
+        "spec.yaml",
+        "--out",
+        "o",
+        "--scheduler",
+        address,
+        cwd=tmp_path,
+    )
     assert_refused(r, "--scheduler", "not a dask scheduler address")
     assert not (tmp_path / "o").exists()
 

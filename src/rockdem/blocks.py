@@ -285,10 +285,16 @@ def _clean_ring(xy: np.ndarray, tol: float, where: str) -> np.ndarray:
     """Drop repeated consecutive vertices (zero-length edges)."""
     nxt = np.roll(xy, -1, axis=0)
     keep = np.hypot(*(nxt - xy).T) > tol
-    xy = xy[keep]
-    if len(xy) < 3:
+    if keep.sum() < 3:
+        if len(np.unique(xy, axis=0)) >= 3 and _extent(xy) > 0:  # small, not degenerate
+            raise InputError(
+                where,
+                f"is smaller than the model's geometric tolerance ({tol:.3g}: "
+                f"{GEOMETRY_RTOL:g} of the extent of all blocks), so its vertices merge",
+                "make it larger, or leave out the blocks far larger than it",
+            )
         raise InputError(where, "has zero area", "give at least three distinct vertices")
-    return xy
+    return xy[keep]
 
 
 def _extent(xy: np.ndarray) -> float:
