@@ -21,7 +21,7 @@ __version__ = "0.1.0"
 #: that ``rockdem --version`` and light scripts do not load SciPy and PARDISO
 _PUBLIC = {
     "analyse": ".analysis",
-    "factor_of_safety": ".analysis",
+    "factor_of_safety": ".strength_reduction",
     "Blocks": ".blocks",
     "Bolt": ".bolts",
     "InputError": ".errors",

@@ -1,11 +1,11 @@
-"""Load stepping and strength reduction: from a model to a verdict.
+"""Load stepping: from a model to a verdict at one strength factor.
 
 ``analyse`` applies the loads in steps (the paper's staged gravity), solves
 each step to equilibrium, and after every converged step commits the spring
 state; where springs failed and lost strength, the same load is solved
 again until no more strength is lost (the progressive redistribution of
-excess force).  ``factor_of_safety`` divides c, tan(phi) (and the tensile
-strength) by trial factors, each trial continuing from the last stable one.
+excess force).  The factor of safety (strength reduction) builds on it:
+:mod:`rockdem.strength_reduction`.
 """
 
 from __future__ import annotations
@@ -16,14 +16,14 @@ from dataclasses import replace
 
 import numpy as np
 
-from .certificate import certificate_for, prove_failed_trial, prove_in_region, with_certificate
+from .certificate import certificate_for, prove_in_region, with_certificate
 from .continuation import RELAXED, solve_equilibrium
 from .linalg import norm
 from .mechanism import held_blocks, newton_mechanism, relaxation_mechanism, slip_surface
 from .model import Model
 from .relaxation import TOLERANCE as RELAXATION_TOLERANCE
-from .relaxation import confirm_failed_analysis, confirm_failed_trial
-from .results import Analysis, Evidence, FactorOfSafety, Step, Trial, tabulate
+from .relaxation import confirm_failed_analysis
+from .results import Analysis, Evidence, Step, tabulate
 from .solver import KINKED, Solve, System, build_system, newton, residual
 from .spring_law import SpringState, commit
 
@@ -33,13 +33,6 @@ log = logging.getLogger(__name__)
 MAX_CASCADE = 100
 #: a failed load step is retried in up to this many equal sub-steps (halving)
 MAX_SUBSTEPS = 8
-#: times a factor-of-safety search goes on past a limit that dynamic
-#: relaxation did not confirm (equilibrium beyond it: a stall of Newton's
-#: method; or undecided: the search tries Newton from where the run ended)
-RESTARTS = 3
-#: ... and at most this many times past a limit beyond which the confirmation
-#: found equilibrium (each moves the bracket up by CONFIRM_MARGINS[0] or more)
-PROGRESS_RESTARTS = 20
 
 
 def _settle(
@@ -335,195 +328,3 @@ def analyse_from(
     if sol.converged:
         return _package(system, sol, new_state, 1.0, strength_factor, True, steps, sol.q)
     return _package(system, sol, state, 0.0, strength_factor, False, steps, q0)
-
-
-def factor_of_safety(
-    model: Model | System,
-    *,
-    width: float = 0.005,
-    start: float = 1.0,
-    grow: float = 1.5,
-    smallest: float = 0.05,
-    largest: float = 100.0,
-    progress: Callable[[Trial], None] | None = None,
-) -> FactorOfSafety:
-    """Factor of safety by shear strength reduction, with continuation.
-
-    The loads are first applied in steps at ``start`` (default 1); each
-    further trial factor continues from the converged state at the largest
-    factor found stable so far (x ``grow`` after a success, bisection after
-    a failure) until the bracket is narrower than ``width``.
-
-    Returns
-    -------
-    FactorOfSafety
-        ``value`` is the midpoint of the bracket (within ``width / 2`` of the
-        limit); ``bracket[0]`` is the conservative, largest stable factor.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from rockdem import Blocks, Joint, Model, factor_of_safety
-    >>> d = np.radians(20)
-    >>> R = np.array([[np.cos(d), -np.sin(d)], [np.sin(d), np.cos(d)]])
-    >>> ground = np.array([(-5, -1), (5, -1), (5, 0), (-5, 0)]) @ R.T
-    >>> block = np.array([(0, 0), (1, 0), (1, 0.5), (0, 0.5)]) @ R.T
-    >>> m = Model(Blocks.from_polygons([ground, block], fixed=[True, False]),
-    ...           Joint(normal_stiffness=1e6, friction_angle=30), )
-    >>> fos = factor_of_safety(m)
-    >>> bool(abs(fos.value - np.tan(np.radians(30)) / np.tan(d)) < 0.005)
-    True
-    """
-    system = model if isinstance(model, System) else build_system(model)
-    trials: list[Trial] = []
-
-    def record(F, a: Analysis):
-        size = float(np.abs(a.displacement[:, :2]).max()) if a.stable else float("nan")
-        t = Trial(F, a.stable, a.evidence, size)
-        trials.append(t)
-        if progress is not None:
-            progress(t)
-
-    # 1. the staged gravity state at the starting factor (fresh, in load steps)
-    F = start
-    first = analyse(system, strength_factor=F)
-    record(F, first)
-    lo_an: Analysis | None = first if first.stable else None
-    hi_an: Analysis | None = None if first.stable else first
-    while lo_an is None:  # unstable at the start: reduce from scratch
-        hi_an = hi_an if hi_an is not None else first
-        reached = hi_an.evidence.reached
-        F = reached if reached is not None and reached < F else F / grow
-        if F < smallest:
-            return FactorOfSafety(
-                None,
-                (0.0, hi_an.strength_factor),
-                "strength-independent",
-                tuple(trials),
-                None,
-                hi_an,
-                _DEFINITION,
-            )
-        a = analyse(system, strength_factor=F)
-        record(F, a)
-        if a.stable:
-            lo_an = a
-        else:
-            hi_an = a
-    # 2. continuation: grow until failure, then bisect.  A failed trial's
-    #    homotopy reports the largest factor it reached in equilibrium and the
-    #    factor just beyond that failed: both narrow the bracket at once.
-    stage = max(step.stage for step in lo_an.steps)  # trials follow the load steps
-    hi_F = hi_an.strength_factor if hi_an is not None else np.inf
-    if hi_an is not None and hi_an.evidence.proof != "lp-certificate":
-        # a staged analysis that stalled without proof bounds nothing: the
-        # continuation from the stable state decides (and may pass it)
-        hi_an, hi_F = None, np.inf
-    restarts = advanced = 0
-    while True:
-        while hi_F - lo_an.strength_factor > width:
-            if hi_an is None:
-                F = lo_an.strength_factor * grow
-                if F > largest:
-                    return FactorOfSafety(
-                        None,
-                        (lo_an.strength_factor, np.inf),
-                        "no-failure",
-                        tuple(trials),
-                        lo_an,
-                        None,
-                        _DEFINITION,
-                    )
-            else:
-                F = 0.5 * (lo_an.strength_factor + hi_F)
-            stage += 1
-            a, sol = _continue(system, lo_an, F, stage, resolution=width / 4)
-            record(F, a)
-            if a.stable:
-                lo_an = a
-                continue
-            hi_an, hi_F = a, min(F, sol.failed_at or F)
-            if sol.reached is not None and sol.reached > lo_an.strength_factor:
-                stage += 1
-                b, _ = _continue(system, lo_an, sol.reached, stage, q0=sol.reached_q)
-                record(sol.reached, b)
-                if b.stable:
-                    lo_an = b
-        lo, hi = lo_an.strength_factor, hi_F
-        if hi_an is None or hi_an.evidence.certified is not None:
-            break
-        hi_an, trials = prove_failed_trial(system, hi_an, lo_an.state, hi, trials)
-        hi_an, trials, run, beyond = confirm_failed_trial(system, hi_an, lo_an, hi, trials)
-        found = run.status == "equilibrium"
-        if (
-            run.status != "mechanism"
-            and not hi_an.evidence.certified
-            and (restarts < RESTARTS or (found and advanced < PROGRESS_RESTARTS))
-        ):
-            # equilibrium beyond the limit (Newton had stalled), or no verdict there
-            # (a stall is no verdict either): search on from where the run ended.
-            # An equilibrium found there moves the bracket up by 2% or more: it
-            # does not count against RESTARTS (toppling columns at 75 degrees
-            # stalled five times on the way to Goodman & Bray's 0.374)
-            if found:
-                advanced += 1
-            else:
-                restarts += 1
-            stage += 1
-            b, _ = _continue(system, lo_an, beyond, stage, q0=run.q, base_factor=beyond)
-            record(beyond, b)
-            if b.stable:
-                lo_an, hi_an, hi_F = b, None, np.inf
-                continue
-        hi_an = relaxation_mechanism(system, hi_an, run)
-        break
-    if hi_an is not None:  # how the contacts stood as failure began
-        hi_an = replace(hi_an, limit_interfaces=lo_an.interfaces)
-    return FactorOfSafety(
-        0.5 * (lo + hi), (lo, hi), "strength", tuple(trials), lo_an, hi_an, _DEFINITION
-    )
-
-
-_DEFINITION = (
-    "shear strength reduction: c, tan(phi) and the tensile strength divided by F at the full "
-    "load; each trial starts from the displacements and the failure flags (yielded, broken) "
-    "of the largest stable F, with the shear springs following the total relative displacement "
-    "(monotonic strength reduction, no slip history)"
-)
-
-
-def _continue(
-    system: System,
-    base: Analysis,
-    factor: float,
-    stage: int,
-    q0=None,
-    resolution=None,
-    base_factor: float | None = None,
-):
-    """One strength trial from the converged state of ``base``: (Analysis, Solve).
-
-    ``q0`` (default: the displacements of ``base``) is in equilibrium at
-    ``base_factor`` (default: ``base``'s factor)."""
-    asm = system.assembly
-    free = ~system.blocks.fixed
-    q_base = np.zeros(asm.n_dof)
-    q_base[asm.dof[free].ravel()] = base.displacement[free].ravel()
-    q0 = q_base if q0 is None else q0
-    lam = base.load_factor
-    start = base.state.without_slip()
-    at = base.strength_factor if base_factor is None else base_factor
-    sol, state = _settle(system, start, q0, lam, factor, stage, at, True, resolution)
-    ev = _evidence(sol)
-    n_failed = int((state.yielded | state.broken).sum())
-    step = Step(stage, lam, factor, sol.converged, ev, n_failed)
-    steps = (*base.steps, step)
-    if sol.converged:
-        return _package(system, sol, state, lam, factor, True, steps, sol.q), sol
-    # the state of the limit: at the factor where equilibrium was lost (the
-    # Newton step that hints at the mechanism keeps the trial's drive)
-    at = sol.failed_at if sol.failed_at is not None else factor
-    failed = _package(
-        system, sol, start, lam, at, False, steps, q_base, near_limit=True, drive=factor
-    )
-    return failed, sol

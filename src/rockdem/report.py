@@ -20,11 +20,12 @@ from pathlib import Path
 import numpy as np
 
 from . import plots
-from .analysis import analyse, factor_of_safety
+from .analysis import analyse
 from .model import Model
 from .report_html import CSS, esc, figure_uri, html_table, img, num
 from .report_tables import bolts_table, failed_table, state_counts, unstable_table, warnings_html
 from .results import Analysis, FactorOfSafety, format_factor
+from .strength_reduction import factor_of_safety
 from .trust import trust_statements
 from .units import parse_units
 

@@ -294,9 +294,9 @@ def fos(
     failed end); result.json also lists the blocks moving at the unstable end.
     """
     with _guard(debug):
-        from ..analysis import factor_of_safety
         from ..output import check_output_dir
         from ..result_tables import fos_summary
+        from ..strength_reduction import factor_of_safety
 
         # the progress hooks are looked up on the package at call time, so that
         # rockdem.cli._step_hook and rockdem.cli._trial_hook stay patchable

@@ -169,9 +169,10 @@ def report(
         is left behind in DIR then.
     """
     with _guard(debug):
-        from ..analysis import analyse, factor_of_safety
+        from ..analysis import analyse
         from ..output import check_output_dir
         from ..solver import build_system
+        from ..strength_reduction import factor_of_safety
 
         # the progress hooks are looked up on the package at call time, so that
         # rockdem.cli._step_hook and rockdem.cli._trial_hook stay patchable
@@ -363,9 +364,10 @@ def plot(
         what = what.lower()
         _plot_options(what, out_file, joint, magnification, ids, dpi)
         _check_new_file(out_file, "--out", overwrite)
-        from ..analysis import analyse, factor_of_safety
+        from ..analysis import analyse
         from ..plots import plot_figure
         from ..solver import build_system
+        from ..strength_reduction import factor_of_safety
 
         # the progress hooks are looked up on the package at call time, so that
         # rockdem.cli._step_hook and rockdem.cli._trial_hook stay patchable

@@ -75,8 +75,8 @@ def le(
 
 
 def _sarma_command(model, example, json_: bool, quiet: bool) -> None:
-    from ..analysis import factor_of_safety
     from ..limit_equilibrium import sarma
+    from ..strength_reduction import factor_of_safety
     from . import _trial_hook
 
     path, m, cfg = _load(model, example)

@@ -32,7 +32,7 @@ def _fos(obj):
     if isinstance(obj, FactorOfSafety):
         return obj
     if isinstance(obj, Model):
-        from ..analysis import factor_of_safety
+        from ..strength_reduction import factor_of_safety
 
         return factor_of_safety(obj)
     raise TypeError("the 'fos' figure needs a Model or a FactorOfSafety")

@@ -15,10 +15,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..analysis import analyse, factor_of_safety
+from ..analysis import analyse
 from ..errors import InputError
 from ..model import Model
 from ..results import FactorOfSafety
+from ..strength_reduction import factor_of_safety
 from ..units import Units
 from . import _edit, _progress
 

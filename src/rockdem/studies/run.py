@@ -238,7 +238,7 @@ def evaluate(
         cfg = validate_document(doc, source=where)
         model = build_model(cfg, source=where, max_blocks=max_blocks)
         if compute == "fos":
-            from ..analysis import factor_of_safety
+            from ..strength_reduction import factor_of_safety
 
             f = factor_of_safety(model, **cfg.analysis.strength_reduction.options())
             lo, hi = f.bracket
