@@ -393,6 +393,9 @@ def test_le_says_in_words_what_no_finite_number_can(tmp_path):
     assert "factor of safety: above 100" in r.stdout
     assert "would carry tension (R < 0)" in r.stdout
     assert not re.search(r"\b(inf|nan)\b|e\+1[0-9]", r.stdout), r.stdout
+    doc = json.loads(_le("topple.yaml", "--json", cwd=tmp_path).stdout)["result"]
+    assert doc["fos"] is None and doc["fos_note"].startswith("above 100")
+    assert doc["support"] is None and doc["support_note"].startswith("none needed")
     (tmp_path / "plane.yaml").write_text(
         "limit_equilibrium:\n  plane_failure: {height: 30, face_angle: 60, plane_dip: 30, "
         "friction_angle: 30, cohesion: 48, unit_weight: 25.5, water_unit_weight: 9.81, "

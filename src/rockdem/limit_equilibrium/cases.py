@@ -22,6 +22,7 @@ only other keys.
 from __future__ import annotations
 
 import inspect
+import math
 from pathlib import Path
 from typing import Any
 
@@ -181,10 +182,26 @@ def _toppling_case(inputs: dict, source: str, where: str) -> dict[str, Any]:
         }
         for i in range(len(t.heights))
     ]
+    # JSON has no infinity: say in words what a null factor or force means
+    if fos is None:
+        fos_note = "none: the toe needs support at every factor (friction cannot hold it)"
+    elif math.isinf(fos):
+        fos_note = "above 100: the toe needs no support at any factor up to 100"
+    else:
+        fos_note = ""
+    support_note = ""
+    if math.isinf(t.support):
+        support_note = (
+            "no finite force holds the toe block"
+            if t.support > 0
+            else "none needed: the toe block can neither topple nor slide"
+        )
     return {
         "support": t.support,
+        "support_note": support_note,
         "stable": t.support <= 0,
         "fos": fos,
+        "fos_note": fos_note,
         "blocks": rows,
         "stable_blocks": t.blocks("stable"),
         "toppling_blocks": t.blocks("toppling"),
