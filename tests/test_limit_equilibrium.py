@@ -404,6 +404,8 @@ def test_le_says_in_words_what_no_finite_number_can(tmp_path):
     r = _le("plane.yaml", cwd=tmp_path)
     assert r.returncode == 0 and not r.stderr, r.stderr
     assert "factor of safety: unbounded" in r.stdout and "inf" not in r.stdout
+    doc = json.loads(_le("plane.yaml", "--json", cwd=tmp_path).stdout)["result"]
+    assert doc["fos"] is None and doc["fos_note"].startswith("unbounded")
 
 
 def test_le_on_a_model_sets_sarma_beside_the_dem(tmp_path):

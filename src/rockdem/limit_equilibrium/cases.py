@@ -118,6 +118,12 @@ def run_case(data: dict, *, source: str = "<case>") -> dict[str, Any]:
         if case == "plane_failure":
             r = plane_failure(**inputs)
             result = r.as_dict()
+            # JSON has no infinity: an unbounded factor is null, said in words
+            result["fos_note"] = (
+                "unbounded: nothing drives the block down the plane"
+                if math.isinf(r.fos)
+                else ""
+            )
         elif case == "wedge":
             r = two_block_wedge(**inputs)
             result = {"thrust": r.thrust, "fos": r.fos, "stable": r.thrust <= 0}
