@@ -277,6 +277,22 @@ def test_format_true_is_not_format_1():
     parse_model("format: 1\n" + BOX)
 
 
+@pytest.mark.parametrize(
+    "profile, problem",
+    [
+        ("[[0, 1], [0, 1]]", "all points coincide"),
+        ("[[-100, 100], [100, 100]]", "does not overlap the model's free blocks"),
+    ],
+)
+def test_a_removal_profile_is_named_by_its_key(profile, problem):
+    """Found by fuzzing: a bad `remove.profile` was reported as "slope:
+    profile ..." or "cut_to_profile profile", names of the library."""
+    with pytest.raises(ModelFileError) as info:
+        parse_model(SLOPE + f"remove:\n  profile: {profile}\n", source="s.yaml")
+    assert info.value.key == "remove.profile" and problem in str(info.value)
+    assert "cut_to_profile" not in str(info.value)
+
+
 def test_error_counts_further_problems():
     text = BOX.replace("friction_angle: 30", "friction_angle: 95, cohesion: -1")
     with pytest.raises(ModelFileError, match=r"1 more problem in the file"):

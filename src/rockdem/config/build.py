@@ -399,7 +399,10 @@ def _slope_model(cfg: ModelFile, joints, loads, settings, name: str, max_blocks:
     for region in cfg.remove.regions:
         geom = geometry.excavate(geom, [tuple(p) for p in region])
     if cfg.remove.profile is not None:
-        geom = geometry.cut_to_profile(geom, [tuple(p) for p in cfg.remove.profile])
+        try:
+            geom = geometry.cut_to_profile(geom, [tuple(p) for p in cfg.remove.profile])
+        except InputError as exc:  # whatever the profile says of itself: at its key
+            raise InputError("remove.profile", exc.problem, exc.fix) from None
     return geom.model(loads=loads, settings=settings, name=name)
 
 
@@ -427,6 +430,8 @@ def _from_engine(
         loc, label = ("slope", gs.group(1)), ""
     elif pr and cfg.slope is not None:
         loc, label = ("slope", "profile", pr.group(1)), ""
+    elif where == "remove.profile":
+        loc, label = ("remove", "profile"), ""
     elif j and j.group(1) in cfg.joints:
         loc, label = ("joints", j.group(1), j.group(2)), ""
     elif js and cfg.slope is not None and js.group(1) in cfg.slope.joint_sets:
