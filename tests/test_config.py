@@ -293,6 +293,17 @@ def test_a_removal_profile_is_named_by_its_key(profile, problem):
     assert "cut_to_profile" not in str(info.value)
 
 
+def test_a_missing_key_quotes_its_whole_first_sentence():
+    """Found by fuzzing: the hint was cut at the dots of `[[x, y], ...]`."""
+    text = BOX.replace("- {material: rock, vertices: [[0, 0], [2, 0], [2, 1], [0, 1]]}",
+                       "- {material: rock}")
+    with pytest.raises(ModelFileError) as info:
+        parse_model(text, source="s.yaml")
+    assert "(Outline `[[x, y], ...]`, at least 3 vertices, in order around the block)" in str(
+        info.value
+    )
+
+
 def test_error_counts_further_problems():
     text = BOX.replace("friction_angle: 30", "friction_angle: 95, cohesion: -1")
     with pytest.raises(ModelFileError, match=r"1 more problem in the file"):

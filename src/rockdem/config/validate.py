@@ -4,6 +4,7 @@ the cross-references between sections."""
 from __future__ import annotations
 
 import difflib
+import re
 import types
 import typing
 from typing import Annotated, Any
@@ -122,7 +123,9 @@ def _field_doc(loc: Loc) -> str:
     if isinstance(parent, type) and issubclass(parent, BaseModel):
         field = parent.model_fields.get(str(loc[-1]))
         if field is not None and field.description:
-            return field.description.split(".")[0].replace("\n", " ")
+            # its first sentence (a period then a space or the end: not the
+            # dots of `[[x, y], ...]`, which cut "Outline `[[x, y], " short)
+            return re.split(r"\.(?:\s|$)", field.description)[0].replace("\n", " ")
     return ""
 
 
