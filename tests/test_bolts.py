@@ -336,3 +336,17 @@ def test_a_row_spacing_that_would_put_millions_of_bolts_on_the_face_is_refused()
     assert 1 <= len(face_rows(model, free, row_spacing=1.0)) <= MAX_ROWS
     with pytest.raises(rd.InputError, match="row_spacing"):
         face_rows(model, free, row_spacing=1e-6)
+
+
+def test_a_bolt_key_the_engine_refuses_is_named_by_its_path():
+    """Found by fuzzing: an unnamed bolt's tiny spacing was reported as
+    "slope: bolts bolts[0] spacing ..."; it is `bolts[0].spacing`."""
+    from rockdem.config import ModelFileError, parse_model
+    from rockdem.examples import example_path
+
+    text = example_path("bolted-slope").read_text()
+    text = text.replace("{name: B1, ", "{", 1).replace("spacing: 1.5}", "spacing: 1.0e-9}", 1)
+    with pytest.raises(ModelFileError) as info:
+        parse_model(text, source="b.yaml")
+    assert info.value.key == "bolts[0].spacing"
+    assert "is far below the size of the blocks" in str(info.value)

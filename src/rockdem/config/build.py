@@ -426,12 +426,15 @@ def _from_engine(
     jl = re.match(r"joint_lines (\d+)$", where)
     gs = re.match(r"generate_slope (\w+)$", where)  # an argument: the slope's key
     pr = re.match(r"Profile\.simple (\w+)$", where)  # a key of slope.profile
+    bk = re.match(r"(bolts .+) (\w+)$", where)
     if gs and cfg.slope is not None:
         loc, label = ("slope", gs.group(1)), ""
     elif pr and cfg.slope is not None:
         loc, label = ("slope", "profile", pr.group(1)), ""
     elif where == "remove.profile":
         loc, label = ("remove", "profile"), ""
+    elif bk and bk.group(1) in names:  # a key of a bolt: "bolts NAME spacing"
+        loc, label = (*names[bk.group(1)], bk.group(2)), ""
     elif j and j.group(1) in cfg.joints:
         loc, label = ("joints", j.group(1), j.group(2)), ""
     elif js and cfg.slope is not None and js.group(1) in cfg.slope.joint_sets:
