@@ -51,11 +51,13 @@ class Certificate:
     def __str__(self) -> str:
         if self.mu is None:
             return f"equilibrium LP: no answer ({self.status})"
-        verdict = "no admissible force field" if self.proves_failure else "admissible"
-        return (
-            f"equilibrium LP at F = {self.strength_factor:.6g}: loads x{self.mu:.4g} "
-            f"carried at most ({verdict} at x{self.load_factor:.4g})"
+        head = (
+            f"equilibrium LP at F = {self.strength_factor:.6g}: statically admissible forces "
+            f"carry at most {self.mu:.4g} times the loads"
         )
+        if self.proves_failure:
+            return f"{head}, less than the {self.load_factor:.4g} applied"
+        return f"{head} ({self.load_factor:.4g} applied: an admissible force field exists)"
 
 
 def admissible_load(

@@ -102,7 +102,8 @@ class Relaxation:
     def __str__(self) -> str:
         return (
             f"dynamic relaxation: {self.status} after {self.steps} steps "
-            f"(unbalanced force ratio {self.ratio:.2e}, late motion x{self.motion:.3g} elastic)"
+            f"(unbalanced force {self.ratio:.2e} of the loads; motion over the last quarter "
+            f"{self.motion:.3g} x the elastic displacement)"
         )
 
 
