@@ -112,7 +112,7 @@ def study(
         _check_out_folder(out_dir, (), overwrite=overwrite, inputs=[path])  # writable?
         plan = prepare(path, spec, max_blocks=_ROOT["max_blocks"])
         if workers != 0:
-            from ..studies.run import import_dask
+            from ..studies.on_dask import import_dask
 
             import_dask()
         total = len(plan.values)

@@ -15,7 +15,6 @@ import hashlib
 import json
 import math
 import os
-import re
 import socket
 import time
 from collections.abc import Callable, Iterable
@@ -303,79 +302,6 @@ def _run_serial(plan: Plan, todo: Iterable[int], on_row: Callable[[dict], None])
     return 0
 
 
-def import_dask():
-    """``dask.distributed``, or an InputError saying how to install it."""
-    try:
-        import dask.distributed as dd
-    except ImportError:
-        raise InputError(
-            "rockdem study", "needs dask[distributed], pandas and pyarrow", INSTALL_HINT
-        ) from None
-    return dd
-
-
-def _check_address(client: str) -> None:
-    if not re.fullmatch(r"(tcp|tls|ucx|ws|wss)://[^\s/:]+:\d{1,5}/?", client):
-        raise InputError(
-            f"--scheduler {client}",
-            "is not a dask scheduler address",
-            "give one such as tcp://host:8786",
-        )
-
-
-def _client(client, workers: int | None, n_tasks: int):
-    """(client, things to close): the given client, one connected to an address, or
-    a local cluster of ``workers`` processes."""
-    dd = import_dask()
-    if isinstance(client, str):
-        _check_address(client)
-        try:
-            c = dd.Client(client, timeout="20s")
-        except (OSError, TimeoutError, ValueError, MemoryError) as exc:
-            raise InputError(
-                f"--scheduler {client}",
-                f"cannot connect ({type(exc).__name__}: {exc})",
-                "give the address of a running dask scheduler, such as tcp://host:8786",
-            ) from None
-        return c, [c]
-    if client is not None:
-        return client, []
-    n = workers if workers is not None else os.cpu_count() or 1
-    n = max(1, min(n, n_tasks))
-    cluster = dd.LocalCluster(
-        n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None
-    )
-    c = dd.Client(cluster)
-    return c, [c, cluster]
-
-
-def _run_dask(plan, todo, on_row, client, workers) -> int:
-    dd = import_dask()
-    todo = list(todo)
-    c, own = _client(client, workers, len(todo))
-    n_workers = len(c.scheduler_info().get("workers", {}))
-    futures = []
-    try:
-        [base] = c.scatter([plan.base], broadcast=True)
-        futures = [c.submit(evaluate, *_args(plan, i, base), pure=False, retries=0) for i in todo]
-        sample_of = {f.key: i for f, i in zip(futures, todo, strict=True)}
-        for fut in dd.as_completed(futures):
-            if fut.status == "finished":
-                row = fut.result()
-            else:
-                exc = fut.exception() if fut.status == "error" else fut.status
-                row = _error_row(plan, sample_of[fut.key], f"task {fut.status}: {exc}")
-            fut.release()
-            on_row(row)
-    finally:
-        pending = [f for f in futures if not f.done()]
-        if pending:
-            c.cancel(pending)
-        for thing in own:
-            thing.close()
-    return n_workers
-
-
 # ================================================================ the study
 def study(
     model,
@@ -429,7 +355,9 @@ def study(
     if workers is not None and client is not None:
         raise InputError("workers", "is for the local cluster", "give workers or a client")
     if isinstance(client, str):
-        _check_address(client)  # before any folder is made
+        from .on_dask import check_address
+
+        check_address(client)  # before any folder is made
     plan = model if isinstance(model, Plan) else prepare(model, spec, max_blocks=max_blocks)
     folder = Path(out) if out is not None else None
     if folder is not None:
@@ -457,7 +385,9 @@ def study(
         if todo and workers == 0 and client is None:
             _run_serial(plan, todo, on_row)
         elif todo:
-            n_workers = _run_dask(plan, todo, on_row, client, workers)
+            from .on_dask import run_on_dask
+
+            n_workers = run_on_dask(plan, todo, on_row, client, workers)
     finally:
         store.close()
     from .stats import summarise
