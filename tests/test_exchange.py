@@ -18,7 +18,8 @@ import rockdem as rd
 from _cli import assert_refused as refused
 from rockdem.cli import app
 from rockdem.config import load_model, parse_model
-from rockdem.exchange.dxf_in import cut_section, example_dxf, read_section
+from rockdem.exchange.dxf_cut import cut_section
+from rockdem.exchange.dxf_in import example_dxf, read_section
 from rockdem.exchange.dxf_out import write_dxf, write_section_dxf
 from rockdem.exchange.model_file import model_text
 from rockdem.output import RESULT_FILES

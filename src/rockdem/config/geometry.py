@@ -88,7 +88,8 @@ def with_dxf_blocks(cfg: Any, source: str, nodes: Any, max_blocks: int | None) -
     ModelFileError
         Anything wrong with the drawing, at ``geometry`` (or the layer key at fault).
     """
-    from ..exchange.dxf_in import DxfError, cut_section, read_section
+    from ..exchange.dxf_cut import cut_section
+    from ..exchange.dxf_in import DxfError, read_section
     from ..units import parse_units
     from .sections import BlockSpec, BoltSpec, JointLineSpec, SupportSpec
 

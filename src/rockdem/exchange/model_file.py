@@ -10,7 +10,8 @@ from typing import Any
 
 import numpy as np
 
-from .dxf_in import DxfError, Section, SectionBlocks, cut_section, read_section
+from .dxf_cut import cut_section
+from .dxf_in import DxfError, Section, SectionBlocks, read_section
 
 __all__ = ["PLACEHOLDER_JOINT", "model_document", "model_text"]
 

@@ -1,0 +1,105 @@
+"""A drawn section (:func:`rockdem.exchange.dxf_in.read_section`) cut into
+blocks along its joint traces, about a local origin so that site
+coordinates keep every digit."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .dxf_entities import _fail
+from .dxf_in import Section, SectionBlocks
+
+__all__ = ["cut_section"]
+
+
+def cut_section(section: Section, *, max_blocks: int | None = None) -> SectionBlocks:
+    """Cut the section into blocks along its joint traces.
+
+    The faces of the arrangement of the outline, the fixed regions and the
+    traces are the blocks; faces in fixed regions are merged into one ground
+    block per connected region.  The cut is made about a local origin (the
+    outline's lowest-left corner) and moved back.
+
+    Raises
+    ------
+    DxfError
+        A fixed region apart from the section, a section left with no free
+        block, more blocks than ``max_blocks``.
+    """
+    import shapely
+
+    from ..blocks import GEOMETRY_RTOL
+    from ..geometry import _topology as topo
+
+    source = section.source
+    origin = section.outline.min(axis=0)
+    outline = shapely.Polygon(section.outline - origin)
+    fixed = [shapely.Polygon(f - origin) for f in section.fixed]
+    domain = shapely.union_all([outline, *fixed])
+    if domain.geom_type != "Polygon":
+        areas = [(k, shapely.intersection(f, outline).area) for k, f in enumerate(fixed)]
+        apart = [k for k, a in areas if a <= 0 and not shapely.touches(fixed[k], outline)]
+        which = f"fixed region {apart[0] + 1}" if apart else "the fixed ground"
+        raise _fail(
+            source,
+            f"{which} lies apart from the outline",
+            "draw the fixed ground inside the outline or along its edge",
+            "layers.fixed",
+        )
+    xmin, ymin, xmax, ymax = domain.bounds
+    extent = math.hypot(xmax - xmin, ymax - ymin)
+    tol = GEOMETRY_RTOL * extent
+    lines = [shapely.LinearRing(outline.exterior), *(f.exterior for f in fixed)]
+    lines += [shapely.LineString(t.points - origin) for t in section.traces]
+    noded = shapely.node(shapely.multilinestrings(shapely.get_parts(np.array(lines, object))))
+    faces = shapely.get_parts(shapely.polygonize(shapely.get_parts(noded)))
+    inside = shapely.buffer(domain, tol, join_style="mitre")
+    shapely.prepare(inside)
+    keep = shapely.contains(inside, faces) & (shapely.area(faces) > 1e-12 * extent**2)
+    faces = faces[keep]
+    ground_area = shapely.union_all(fixed)
+    shapely.prepare(ground_area)
+    in_ground = shapely.contains(ground_area, shapely.point_on_surface(faces))
+    thin = 2 * tol
+    if ((shapely.area(faces) <= thin * shapely.length(faces)) & ~in_ground).any():
+        faces, where, _ = topo.merge_slivers(faces, 0.0, movable=~in_ground, thin=thin)
+        moved = np.zeros(len(faces), dtype=bool)
+        moved[where[in_ground]] = True
+        in_ground = moved
+    free = faces[~in_ground]
+    if len(free) == 0:
+        raise _fail(
+            source,
+            "the fixed ground covers the whole section: no free block",
+            "draw the fixed regions around the ground only",
+            "layers.fixed",
+        )
+    if max_blocks is not None and len(free) > max_blocks:
+        raise _fail(
+            source,
+            f"the traces cut {len(free):,} blocks, more than the limit of {max_blocks:,}",
+            "raise the limit with `rockdem --max-blocks N ...` or draw fewer traces",
+        )
+    cen = shapely.get_coordinates(shapely.centroid(free))
+    key = np.round(cen / (1e-6 * extent))  # ties within round-off sort the same anywhere
+    free = free[np.lexsort((key[:, 1], key[:, 0]))]
+    fxy, foff = topo.to_arrays(free, tol)
+    polygons = [fxy[foff[i] : foff[i + 1]] + origin for i in range(len(free))]
+    ground = shapely.get_parts(shapely.coverage_union_all(faces[in_ground]))
+    for g in ground:
+        # the traces' nodes on the ground's outline are no corners: drop them (simplify
+        # within the tolerance), then make every free block's corner on it a vertex
+        g = shapely.simplify(shapely.polygons(shapely.get_exterior_ring(g)), tol)
+        g = topo.insert_vertices(g, fxy, 10 * tol)
+        gxy, _ = topo.to_arrays(np.array([g], dtype=object), tol)
+        polygons.append(gxy + origin)
+    flags = np.zeros(len(polygons), dtype=bool)
+    flags[len(free) :] = True
+    segs = tuple(
+        (t.joint, t.points[k].copy(), t.points[k + 1].copy())
+        for t in section.traces
+        for k in range(len(t.points) - 1)
+    )
+    return SectionBlocks(polygons=tuple(polygons), fixed=flags, lines=segs)
