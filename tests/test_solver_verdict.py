@@ -237,6 +237,11 @@ def test_a_newton_stall_in_a_load_step_is_no_verdict(tmp_path):
     assert a.load_factor == 1.0
     rescued = [s for s in a.steps if s.evidence.relaxation]
     assert rescued and "equilibrium" in rescued[0].evidence.relaxation
+    # ... and the result says so (report, command line)
+    from rockdem.trust import trust_statements
+
+    said = [t for t in trust_statements(a) if "Newton stalled and dynamic relaxation" in t]
+    assert said and said[0].startswith(f"Load step {rescued[0].stage}:")
     fos = rd.factor_of_safety(model)
     assert fos.bracket[0] > 1.0
     assert fos.value == pytest.approx(np.tan(np.radians(35)) / np.tan(np.radians(30)), rel=0.02)

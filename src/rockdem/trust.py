@@ -46,6 +46,7 @@ def trust_statements(a: Analysis, fos: FactorOfSafety | None = None) -> list[str
             if ev.residuals
             else f"Newton: {ev.reason}."
         )
+    out += relaxed_steps(a)
     settings = a.system.model.settings
     out.append(
         f"Each joint is represented by {settings.points_per_interface} spring points "
@@ -62,4 +63,25 @@ def trust_statements(a: Analysis, fos: FactorOfSafety | None = None) -> list[str
             f"Water is a pore-pressure ratio r_u = {ru:g}: every joint carries r_u times the "
             "vertical overburden of rock above it (a quick check, not a flow field)."
         )
+    return out
+
+
+def relaxed_steps(a: Analysis) -> list[str]:
+    """One sentence per load step whose equilibrium Newton could not find and
+    dynamic relaxation did (:func:`rockdem.analysis.analyse` goes on from it)."""
+    from .continuation import RELAXED
+
+    out = []
+    for step in a.steps:
+        ev = step.evidence
+        if step.converged and ev.relaxation:
+            how = (
+                "taken as the relaxation left it (within 1e-7 of the loads)"
+                if ev.reason == RELAXED
+                else "then polished by Newton"
+            )
+            out.append(
+                f"Load step {step.stage}: Newton stalled and dynamic relaxation found the "
+                f"equilibrium, {how} ({ev.relaxation})."
+            )
     return out

@@ -171,6 +171,10 @@ def _print_run(doc: dict[str, Any], result) -> None:
             f"verdict: [bold green]STABLE[/bold green] under the full load "
             f"({_plural(n, 'load step')})"
         )
+        from ..trust import relaxed_steps
+
+        for line in relaxed_steps(result):
+            out.print(f"note: {escape(line)}")
     else:
         out.print(
             f"verdict: [bold red]UNSTABLE[/bold red]: no equilibrium at load step {n} "
