@@ -40,6 +40,21 @@ def test_refactorised_tangents_are_solved_to_round_off(system, monkeypatch, forc
     assert fz.count == 3
 
 
+def test_superlu_keeps_its_fill_reducing_order_on_large_systems(system):
+    """Above PARDISO_FROM unknowns SuperLU takes the diagonal pivots of its
+    minimum-degree order (no row swaps on a sliding tangent), so the fill
+    stays that of the order: with SciPy's default partial pivoting a
+    9,638-block slope's tangent filled to 159 million entries (110 s per
+    factorisation) against 5.5 million (0.3-0.4 s)."""
+    _, _, J = _sliding_tangent(system)
+    assert J.shape[0] > linalg.PARDISO_FROM
+    lu = linalg._SuperLU(J).lu
+    assert np.array_equal(lu.perm_r, lu.perm_c)
+    b = system.f_ext
+    x = lu.solve(b)
+    assert np.linalg.norm(J @ x - b) <= 1e-10 * np.linalg.norm(b)
+
+
 def test_a_stale_pardiso_factor_refuses_to_solve(system):
     if linalg.backend(system.assembly.n_dof) != "pardiso":
         pytest.skip("PARDISO is not installed here")

@@ -12,7 +12,15 @@ depends only on the pattern is done once per model:
   residual 1e-12 either way).  The MKL library is located once per process.
 * **SuperLU** (SciPy, always available): a fresh LU per matrix with the
   minimum-degree ordering of ``A + A^T`` (the pattern is structurally
-  symmetric), which fills in much less than COLAMD here.
+  symmetric), which fills in much less than COLAMD here.  Above
+  ``PARDISO_FROM`` unknowns diagonal pivots are preferred (threshold
+  ``DIAGONAL_PIVOT``, SuperLU's symmetric mode): partial pivoting swaps
+  rows away from that ordering, and on a 9,638-block slope (28,914
+  unknowns) the factors filled to 159 million entries, 110 s per
+  factorisation, against 5.5 million and 0.3-0.4 s with diagonal pivots
+  (relative residual 2e-14 either way).  Small systems keep partial
+  pivoting: their fill does not matter, and the paths of the toppling
+  verification cases were validated with it.
 
 ``ROCKDEM_SOLVER=superlu`` forces SuperLU.  :func:`backend` tells which one
 runs (``rockdem check`` prints it).
@@ -78,9 +86,21 @@ def _pardiso_handle():
     return solver
 
 
+#: SuperLU takes a diagonal pivot unless it is smaller than this share of
+#: the largest entry of its column (stiffness matrices are nearly diagonally
+#: dominant; the shifted tangent is too)
+DIAGONAL_PIVOT = 0.01
+
+
 class _SuperLU:
     def __init__(self, A) -> None:
-        self.lu = spla.splu(sp.csc_array(A), permc_spec="MMD_AT_PLUS_A")
+        large = A.shape[0] > PARDISO_FROM
+        self.lu = spla.splu(
+            sp.csc_array(A),
+            permc_spec="MMD_AT_PLUS_A",
+            diag_pivot_thresh=DIAGONAL_PIVOT if large else 1.0,
+            options={"SymmetricMode": large},
+        )
 
     def solve(self, b: np.ndarray) -> np.ndarray:
         x = self.lu.solve(b)
