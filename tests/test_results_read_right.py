@@ -697,3 +697,47 @@ def test_a_staged_failure_reads_its_modes_at_the_last_load_carried():
     normal = a.load_factor * weight * np.cos(np.radians(35))
     assert limit.normal_force[base] == pytest.approx(normal, rel=1e-6)
     assert failure_modes(a).blocks("slides").tolist() == [1]
+
+
+def test_an_undecided_unstable_end_makes_the_factor_a_lower_bound_only(monkeypatch):
+    """When nothing proves or confirms the failure above the bracket (proof
+    "undecided"), the headline must not read as a factor of safety: only the
+    stable end is known (a 75-degree toppling case, ten times larger, read
+    0.143 against Goodman & Bray's 0.374 after a change of pivoting, its
+    upper end "undecided")."""
+    from rich.console import Console
+
+    from rockdem.cli import analyses
+    from rockdem.result_tables import fos_summary
+
+    fos = rd.factor_of_safety(wedge())
+    failed = fos.failed_analysis
+    last = failed.steps[-1]
+    ev = dataclasses.replace(
+        last.evidence,
+        certified=None,
+        certificate=None,
+        relaxation="dynamic relaxation: undecided after 4000 steps",
+    )
+    failed = dataclasses.replace(
+        failed, steps=(*failed.steps[:-1], dataclasses.replace(last, evidence=ev))
+    )
+    undecided = dataclasses.replace(fos, failed_analysis=failed)
+    assert undecided.proof == "undecided"
+    lo = undecided.bracket[0]
+
+    def headline(result):
+        console = Console(record=True, width=300)
+        monkeypatch.setattr(analyses, "out", console)
+        doc = {"model_name": "wedge", "model_file": "-", **fos_summary(result)}
+        analyses._print_fos(doc)
+        return console.export_text().splitlines()[1]
+
+    assert headline(undecided).startswith(f"factor of safety: at least {lo:.4f} (undecided")
+    assert headline(fos) == f"factor of safety: {fos.value:.4f}"
+    from rockdem.report import _verdict
+
+    assert f"Factor of safety: at least {lo:.3f} (undecided" in _verdict(
+        fos.stable_analysis, undecided
+    )
+    assert f"Factor of safety F = {fos.value:.3f} " in _verdict(fos.stable_analysis, fos)

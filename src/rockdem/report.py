@@ -128,7 +128,13 @@ def _verdict(a: Analysis, fos: FactorOfSafety | None) -> str:
     parts = [f'<div class="verdict {cls}" id="verdict">{esc(text)}</div>']
     if fos is not None:
         lo, hi = fos.bracket
-        if fos.value is not None:
+        if fos.value is not None and fos.proof == "undecided":
+            parts.append(
+                f'<p class="fos" id="fos">Factor of safety: at least {lo:.3f} (undecided '
+                f"above it: equilibrium was lost at {hi:.4f}, but no failure was proven or "
+                "confirmed there)</p>"
+            )
+        elif fos.value is not None:
             parts.append(
                 f'<p class="fos" id="fos">Factor of safety F = {fos.value:.3f} '
                 f"(bracket {lo:.4f} - {num(hi, '.4f')})</p>"

@@ -345,10 +345,17 @@ def _print_fos(doc: dict[str, Any]) -> None:
     lo, hi = doc["bracket"]
     n = len(doc["trials"])
     if doc["factor_of_safety"] is not None:
-        out.print(f"factor of safety: [bold]{doc['factor_of_safety']:.4f}[/bold]")
+        if doc["proof"] == "undecided":  # nothing shows a failure above the stable end
+            out.print(
+                f"factor of safety: [bold]at least {lo:.4f}[/bold] ([yellow]undecided[/yellow] "
+                f"above it: equilibrium was lost at {hi:.4f}, but no failure was proven or "
+                "confirmed there)"
+            )
+        else:
+            out.print(f"factor of safety: [bold]{doc['factor_of_safety']:.4f}[/bold]")
         out.print(f"bracket: stable at {lo:.4f}, unstable at {hi:.4f} ({n} trials)")
         out.print(f"unstable end: {_PROOF[doc['proof']]}")
-        if doc["proof"] == "dynamic-relaxation" and doc.get("relaxation"):
+        if doc["proof"] in ("dynamic-relaxation", "undecided") and doc.get("relaxation"):
             out.print(f"  ({escape(doc['relaxation'])})")
         if doc.get("certified_upper_bound") is not None:
             out.print(f"rigorous upper bound (equilibrium LP): {doc['certified_upper_bound']:.4f}")
