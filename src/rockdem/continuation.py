@@ -264,11 +264,6 @@ def _strength_homotopy(system, state, lam, target, F_ok, q_ok, bad, smallest, ma
         trial = newton(system, state, lam, F_try, q_ok, min(max_it, HOMOTOPY_ITERATIONS))
         total += trial.iterations
         history += trial.residuals
-        if trial.reason == "iteration limit":  # still converging: let it finish
-            more = newton(system, state, lam, F_try, trial.q, min(max_it, HOMOTOPY_ITERATIONS))
-            total += more.iterations
-            history += more.residuals
-            trial = more
         if trial.converged:
             if F_try == target:
                 return Solve(
