@@ -245,3 +245,40 @@ def test_a_newton_stall_in_a_load_step_is_no_verdict(tmp_path):
     fos = rd.factor_of_safety(model)
     assert fos.bracket[0] > 1.0
     assert fos.value == pytest.approx(np.tan(np.radians(35)) / np.tan(np.radians(30)), rel=0.02)
+
+
+def test_a_failed_jump_to_zero_fictitious_strength_releases_further_first(monkeypatch):
+    """From scratch the solver releases a fictitious cohesion ``s x ref``
+    (``ref`` the largest elastic spring stress) geometrically and jumps to
+    zero below ``s = 1e-3``.  On a 94,533-block slope ``ref`` (the deepest
+    spring) is far above the strength of the shallow springs and that jump
+    failed: the release gave up and the search started again at half the
+    strength factor (988 s for the gravity state).  A failed jump must
+    release further before jumping again.  Here Newton is made to fail every
+    jump to zero from ``s >= 1e-4``."""
+    from rockdem import continuation
+
+    system = rd.build_system(
+        V.block_on_plane(20.0, rd.Joint(normal_stiffness=1e6, friction_angle=30))
+    )
+    base = system.springs.cohesion.copy()
+    real, tried, ok = continuation.newton, [], []
+
+    def newton(sys_, state, lam, factor, q, max_it):
+        fict = float(sys_.springs.cohesion[0] - base[0])
+        tried.append(fict)
+        if fict == 0.0 and ok and ok[-1] >= 1e-4 * tried[0]:
+            sol = real(sys_, state, lam, factor, q, 1)
+            return replace(sol, converged=False, reason="stalled")
+        sol = real(sys_, state, lam, factor, q, max_it)
+        if sol.converged:
+            ok.append(fict)
+        return sol
+
+    monkeypatch.setattr(continuation, "newton", newton)
+    state = SpringState.initial(system.springs.n_springs)
+    sol = continuation._release(system, state, 1.0, 1.0, 50)
+    assert sol.converged and sol.reached == 0.0
+    assert 0.0 < min(f for f in ok if f > 0) < 1e-4 * tried[0]
+    # planar sliding at phi 30 on a 20 degree plane: the block holds, at rest
+    assert sol.residuals[-1] <= system.model.settings.tolerance
