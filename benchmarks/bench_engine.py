@@ -10,6 +10,9 @@ Cases (issue 2):
   system, the staged gravity analysis and the factor of safety, with the peak
   resident memory of a fresh process per size.
 
+* with ``--paths``, search-path cases (benchmarks/models/): models whose
+  factor-of-safety search once crawled (a near-flat benched slope).
+
 Prints a Markdown table.  Times are wall-clock medians; the growth exponent
 p fits t ~ n^p between consecutive sizes.
 """
@@ -51,6 +54,25 @@ def small_cases(repeat: int) -> list[dict]:
     n = int((~slope.blocks.fixed).sum())
     rows.append(dict(case="bedded slope FS", n=n, seconds=t, fos=fos.value, exact=exact))
     return rows
+
+
+def path_cases() -> None:
+    """Searches that once crawled: the result, factorisations and time of one run."""
+    from pathlib import Path
+
+    import rockdem as rd
+    from rockdem.config import load_model
+
+    print("| search-path case | blocks | FS search s | result | factorisations |")
+    print("|---|---|---|---|---|")
+    for path in sorted((Path(__file__).parent / "models").glob("*.yaml")):
+        model, _ = load_model(path)
+        system = rd.build_system(model)
+        t, fos = _median_time(lambda s=system: rd.factor_of_safety(s), 1)
+        lo = fos.bracket[0]
+        result = f"{fos.value:.4f}" if fos.value is not None else f"{fos.mode}, stable at {lo:.4g}"
+        n = int((~model.blocks.fixed).sum())
+        print(f"| {path.stem} | {n:,} | {t:.1f} | {result} | {system.factorizer.count} |")
 
 
 def one_size(n: int, repeat: int, fos: bool) -> dict:
@@ -104,7 +126,11 @@ def main() -> None:
     p.add_argument("--fos-up-to", type=int, default=10000, help="largest size with a FS run")
     p.add_argument("--quick", action="store_true", help="one run each, sizes 1000 and 3000")
     p.add_argument("--one", type=int, help=argparse.SUPPRESS)
+    p.add_argument("--paths", action="store_true", help="only the search-path cases (models/)")
     args = p.parse_args()
+    if args.paths:
+        path_cases()
+        return
     if args.one:
         print(json.dumps(one_size(args.one, args.repeat, args.one <= args.fos_up_to)))
         return
