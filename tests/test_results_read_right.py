@@ -741,3 +741,38 @@ def test_an_undecided_unstable_end_makes_the_factor_a_lower_bound_only(monkeypat
         fos.stable_analysis, undecided
     )
     assert f"Factor of safety F = {fos.value:.3f} " in _verdict(fos.stable_analysis, fos)
+
+
+def test_an_unchecked_stall_on_a_large_model_is_stated(monkeypatch):
+    """Above 20,000 unknowns no second solver checks a Newton stall at the
+    top of the bracket, so the factor of safety is only known to the
+    confirmation's margin (94,533 blocks: 1.8978 against the exact 1.9238):
+    "how far to trust this" must say so, and must not on a model where the
+    check runs.  The size rule is lowered here so that the wedge counts as
+    large."""
+    from rockdem import continuation
+    from rockdem.trust import trust_statements
+
+    fos = rd.factor_of_safety(wedge())
+    failed = fos.failed_analysis
+    last = failed.steps[-1]
+    ev = dataclasses.replace(
+        last.evidence,
+        certified=None,
+        certificate=None,
+        relaxation="dynamic relaxation: mechanism after 4000 steps at F = 1.02 (2% beyond)",
+    )
+    failed = dataclasses.replace(
+        failed, steps=(*failed.steps[:-1], dataclasses.replace(last, evidence=ev))
+    )
+    confirmed = dataclasses.replace(fos, failed_analysis=failed)
+    assert confirmed.proof == "dynamic-relaxation"
+
+    def said(result):
+        return [t for t in trust_statements(result.stable_analysis, result) if "not checked" in t]
+
+    assert said(confirmed) == []
+    monkeypatch.setattr(continuation, "STALL_CHECK_WORK", 1.0)
+    n = fos.stable_analysis.system.assembly.n_dof
+    assert said(confirmed) and f"({n:,} unknowns)" in said(confirmed)[0]
+    assert said(fos) == []  # proven by the LP: nothing to check

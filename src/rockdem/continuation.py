@@ -315,10 +315,16 @@ def _stall_check(system: System, state: SpringState, lam: float, factor: float, 
 
         if admissible_load(system, state, lam, factor).proves_failure:
             return None
-    segment = int(min(STALL_CHECK_WORK / system.assembly.n_dof, 4_000))
-    if segment < STALL_CHECK_MIN:
+    if not stall_checked(system.assembly.n_dof):
         return None
+    segment = int(min(STALL_CHECK_WORK / system.assembly.n_dof, 4_000))
     return relax(system, state, lam, factor, q0, max_steps=segment, extend=True)
+
+
+def stall_checked(n_dof: int) -> bool:
+    """Is a Newton failure at the top of a bracket checked for a stall on a
+    model of ``n_dof`` unknowns?  (Not above 20,000: see :func:`_stall_check`.)"""
+    return STALL_CHECK_WORK / max(n_dof, 1) >= STALL_CHECK_MIN
 
 
 def _stall_text(run) -> str | None:

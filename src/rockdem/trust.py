@@ -38,6 +38,18 @@ def trust_statements(a: Analysis, fos: FactorOfSafety | None = None) -> list[str
         out.append(f"The failure is {PROOF_TEXT[proof]}.")
         if ev.relaxation:
             out.append(f"Second solver, {ev.relaxation}.")
+        if fos is not None and proof != "lp-certificate":
+            from .continuation import stall_checked
+
+            n_dof = a.system.assembly.n_dof
+            if not stall_checked(n_dof):
+                out.append(
+                    f"On a model this large ({n_dof:,} unknowns) a Newton stall at the top of "
+                    "the bracket is not checked by the second solver (too slow): failure is "
+                    "only confirmed a little above the bracket, and the factor of safety may "
+                    "lie anywhere up to that factor (a 94,533-block brick slope read 1.8978 "
+                    "against the exact 1.9238)."
+                )
         if ev.certificate:
             out.append(f"{ev.certificate[0].upper()}{ev.certificate[1:]}.")
         out.append(
