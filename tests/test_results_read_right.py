@@ -699,6 +699,16 @@ def test_a_staged_failure_reads_its_modes_at_the_last_load_carried():
     assert failure_modes(a).blocks("slides").tolist() == [1]
 
 
+def _unproven(fos, relaxation: str):
+    """``fos`` as if the LP had proven nothing and the second solver had said
+    ``relaxation`` about its unstable end."""
+    failed = fos.failed_analysis
+    last = failed.steps[-1]
+    ev = dataclasses.replace(last.evidence, certified=None, certificate=None, relaxation=relaxation)
+    steps = (*failed.steps[:-1], dataclasses.replace(last, evidence=ev))
+    return dataclasses.replace(fos, failed_analysis=dataclasses.replace(failed, steps=steps))
+
+
 def test_an_undecided_unstable_end_makes_the_factor_a_lower_bound_only(monkeypatch):
     """When nothing proves or confirms the failure above the bracket (proof
     "undecided"), the headline must not read as a factor of safety: only the
@@ -711,18 +721,7 @@ def test_an_undecided_unstable_end_makes_the_factor_a_lower_bound_only(monkeypat
     from rockdem.result_tables import fos_summary
 
     fos = rd.factor_of_safety(wedge())
-    failed = fos.failed_analysis
-    last = failed.steps[-1]
-    ev = dataclasses.replace(
-        last.evidence,
-        certified=None,
-        certificate=None,
-        relaxation="dynamic relaxation: undecided after 4000 steps",
-    )
-    failed = dataclasses.replace(
-        failed, steps=(*failed.steps[:-1], dataclasses.replace(last, evidence=ev))
-    )
-    undecided = dataclasses.replace(fos, failed_analysis=failed)
+    undecided = _unproven(fos, "dynamic relaxation: undecided after 4000 steps")
     assert undecided.proof == "undecided"
     lo = undecided.bracket[0]
 
@@ -754,18 +753,9 @@ def test_an_unchecked_stall_on_a_large_model_is_stated(monkeypatch):
     from rockdem.trust import trust_statements
 
     fos = rd.factor_of_safety(wedge())
-    failed = fos.failed_analysis
-    last = failed.steps[-1]
-    ev = dataclasses.replace(
-        last.evidence,
-        certified=None,
-        certificate=None,
-        relaxation="dynamic relaxation: mechanism after 4000 steps at F = 1.02 (2% beyond)",
+    confirmed = _unproven(
+        fos, "dynamic relaxation: mechanism after 4000 steps at F = 1.02 (2% beyond)"
     )
-    failed = dataclasses.replace(
-        failed, steps=(*failed.steps[:-1], dataclasses.replace(last, evidence=ev))
-    )
-    confirmed = dataclasses.replace(fos, failed_analysis=failed)
     assert confirmed.proof == "dynamic-relaxation"
 
     def said(result):
