@@ -282,3 +282,53 @@ def test_a_failed_jump_to_zero_fictitious_strength_releases_further_first(monkey
     assert 0.0 < min(f for f in ok if f > 0) < 1e-4 * tried[0]
     # planar sliding at phi 30 on a 20 degree plane: the block holds, at rest
     assert sol.residuals[-1] <= system.model.settings.tolerance
+
+
+def _load_levels_tried(monkeypatch, model):
+    """The load factors a one-step analysis of ``model`` solved for, with the
+    whole-model LP out of reach (as on models above CERTIFY_MAX_SPRINGS)."""
+    from rockdem import analysis
+    from rockdem.certificate import Certificate
+
+    def not_solved(system, state, lam, factor, region=None):
+        return Certificate(lam, factor, None, "not solved (a large model)")
+
+    real, levels = analysis._settle, []
+
+    def settle(system, state, q0, lam, *args, **kwargs):
+        levels.append(lam)
+        return real(system, state, q0, lam, *args, **kwargs)
+
+    monkeypatch.setattr(analysis, "certificate_for", not_solved)
+    monkeypatch.setattr(analysis, "_settle", settle)
+    return rd.analyse(model, load_steps=1), levels
+
+
+def test_a_frictional_slope_failing_under_gravity_is_searched_once(monkeypatch):
+    """Without cohesion, tensile strength or bolts the response scales with
+    the load (planar sliding: phi 20 on a 30 degree plane fails at any load,
+    Hoek & Bray).  From the unloaded state a smaller sub-step only repeats the
+    failed search scaled down: a 1,021-block slope unstable under gravity
+    searched four times (1,400 factorisations, 27 s) for one verdict."""
+    from rockdem.analysis import scale_free
+
+    model = V.block_on_plane(30.0, rd.Joint(normal_stiffness=1e6, friction_angle=20))
+    assert scale_free(rd.build_system(model))
+    a, levels = _load_levels_tried(monkeypatch, model)
+    assert not a.stable
+    assert levels == [1.0]
+
+
+def test_a_cohesive_slope_failing_under_gravity_is_still_sub_stepped(monkeypatch):
+    """With cohesion the loading path matters: c = 3.5 kPa on the 2 m base
+    holds the block at half the load (net drive 50 kN x (sin 30 - cos 30
+    tan 20) / 2 = 4.6 kN < 7 kN) but not at the full load (9.2 kN), so the
+    load step is retried in sub-steps and the half load is carried."""
+    from rockdem.analysis import scale_free
+
+    joint = rd.Joint(normal_stiffness=1e6, friction_angle=20, cohesion=3.5)
+    model = V.block_on_plane(30.0, joint)
+    assert not scale_free(rd.build_system(model))
+    a, levels = _load_levels_tried(monkeypatch, model)
+    assert not a.stable
+    assert levels[:2] == [1.0, 0.5] and a.load_factor >= 0.5
