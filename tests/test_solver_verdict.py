@@ -332,3 +332,33 @@ def test_a_cohesive_slope_failing_under_gravity_is_still_sub_stepped(monkeypatch
     a, levels = _load_levels_tried(monkeypatch, model)
     assert not a.stable
     assert levels[:2] == [1.0, 0.5] and a.load_factor >= 0.5
+
+
+def test_a_search_below_an_unstable_gravity_state_starts_where_it_stopped(monkeypatch):
+    """Bedding dipping 20 degrees under phi 15 (planar sliding: FS = tan 15 /
+    tan 20 = 0.736, Hoek & Bray) fails under gravity; the failed search
+    reached equilibrium up to a strength factor just below that.  The factor
+    of safety then analyses the slope at that factor: from that equilibrium,
+    not from scratch (a 1,021-block slope: 721 -> 448 factorisations, the
+    same factor of safety)."""
+    from rockdem import continuation
+
+    system = rd.build_system(V.brick_slope(100, friction_angle=15))
+    first = rd.analyse(system)
+    assert not first.stable
+    lam, reached, q = first.unloaded_limit
+    assert lam == first.steps[0].load_factor and reached == first.evidence.reached
+    assert reached < 1.0 and q.shape == (system.assembly.n_dof,)
+    again = rd.analyse(system, strength_factor=reached, start=first.unloaded_limit)
+    assert again.stable and again.steps[0].evidence.iterations == 0
+
+    real, released = continuation._release, []
+
+    def release(system_, state, lam_, factor, max_it, resume=None):
+        released.append(factor)
+        return real(system_, state, lam_, factor, max_it, resume)
+
+    monkeypatch.setattr(continuation, "_release", release)
+    fos = rd.factor_of_safety(system)
+    assert reached not in released and 1.0 in released
+    assert fos.value == pytest.approx(np.tan(np.radians(15)) / np.tan(np.radians(20)), rel=0.01)

@@ -136,7 +136,7 @@ def scale_free(system: System) -> bool:
     return system.bolts is None and not any(np.any(a) for a in strengths)
 
 
-def _load_step(system, state, q, lam_prev, lam, factor, stage):
+def _load_step(system, state, q, lam_prev, lam, factor, stage, start=None):
     """Settle the load at ``lam`` from equilibrium at ``lam_prev``; where the
     whole increment fails and the equilibrium LP does not prove the load
     beyond every admissible force field, retry it in smaller sub-steps
@@ -147,17 +147,25 @@ def _load_step(system, state, q, lam_prev, lam, factor, stage):
     the loading path.  Not from the unloaded state of a :func:`scale_free`
     model, whose sub-steps repeat the same search scaled down (a 1,021-block
     frictional slope, unstable under gravity: four identical searches, 1,400
-    factorisations).  Returns ``(solve, state, q, lam_reached, certificate)``
-    (the certificate of the load ``lam`` when it was computed, else None).
+    factorisations).  ``start``: an ``Analysis.unloaded_limit`` at this
+    load, where the whole step's search starts.  Returns ``(solve, state, q,
+    lam_reached, certificate, unloaded_limit)`` (the certificate of the load
+    ``lam`` when it was computed, else None; the limit when the whole step
+    failed from the unloaded state, else None).
     """
     full = lam - lam_prev
     inc = full
     iterations, history = 0, []
-    cert = None
+    cert = limit = None
+    if start is not None and not (lam_prev == 0.0 and start[0] == lam):
+        start = None
     while True:
         target = min(lam, lam_prev + inc)
         q0 = q * (target / lam_prev) if lam_prev > 0 else q
-        sol, new_state = _settle(system, state, q0, target, factor, stage)
+        base = None
+        if start is not None and target == lam:  # at an equilibrium of a weaker factor
+            base, q0 = start[1], start[2]
+        sol, new_state = _settle(system, state, q0, target, factor, stage, base)
         iterations += sol.iterations
         history += sol.residuals
         if sol.converged:
@@ -165,6 +173,14 @@ def _load_step(system, state, q, lam_prev, lam, factor, stage):
             if lam_prev >= lam * (1 - 1e-12):
                 break
             continue
+        if (
+            lam_prev == 0.0
+            and target == lam
+            and new_state is state  # the failed search ran from the unloaded state
+            and sol.reached is not None
+            and sol.reached_q is not None
+        ):
+            limit = (lam, sol.reached, sol.reached_q)
         if cert is None:
             cert = certificate_for(system, state, 1.0, factor)
             if cert.proves_failure and cert.mu < lam:
@@ -175,7 +191,7 @@ def _load_step(system, state, q, lam_prev, lam, factor, stage):
             break
         inc *= 0.5
     sol = replace(sol, iterations=iterations, residuals=history)
-    return sol, state, q, lam_prev, cert
+    return sol, state, q, lam_prev, cert, limit
 
 
 def _package(
@@ -236,6 +252,7 @@ def analyse(
     strength_factor: float = 1.0,
     load_steps: int | None = None,
     progress: Callable[[int, int], None] | None = None,
+    start: tuple[float, float, np.ndarray] | None = None,
 ) -> Analysis:
     """Apply the loads in steps and find equilibrium, or the failure mechanism.
 
@@ -248,6 +265,10 @@ def analyse(
         Overrides ``model.settings.load_steps``.
     progress : callable, optional
         Called as ``progress(step, n_steps)`` after each load step.
+    start : tuple, optional
+        The ``unloaded_limit`` of a failed analysis of the same system at a
+        larger strength factor: the first load step starts from its
+        equilibrium (at ``start[1]``), not from scratch.
 
     Returns
     -------
@@ -274,8 +295,8 @@ def analyse(
     sol = None
     for k in range(1, n_steps + 1):
         lam = k / n_steps
-        sol, state, q, lam_prev, cert = _load_step(
-            system, state, q, lam_prev, lam, strength_factor, k
+        sol, state, q, lam_prev, cert, limit = _load_step(
+            system, state, q, lam_prev, lam, strength_factor, k, start if k == 1 else None
         )
         ev = _evidence(sol)
         if not sol.converged:  # is the full load beyond every admissible force field?
@@ -306,7 +327,7 @@ def analyse(
                 reduce = system.model.settings.reduce_tensile
                 _, carried = tabulate(system, state, resp, strength_factor, reduce)
                 failed = replace(failed, limit_interfaces=carried)
-            return failed
+            return replace(failed, unloaded_limit=limit)
     return _package(system, sol, state, lam_prev, strength_factor, True, steps, q)
 
 

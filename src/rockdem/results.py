@@ -202,6 +202,13 @@ class Analysis:
         contacts were open or at their strength as failure began
         (:func:`rockdem.modes.failure_modes` reads sliding or toppling from
         them).
+    unloaded_limit : (float, float, ndarray) or None
+        For a failure in the first load step: ``(load factor, strength
+        factor, free-dof displacements)`` of the equilibrium the search found
+        at that load at the largest strength factor it reached, from the
+        unloaded state (so valid at that factor whatever this analysis's):
+        a staged analysis at that factor starts its first step there
+        (``analyse(start=...)``) instead of from scratch.
     """
 
     system: System
@@ -217,6 +224,7 @@ class Analysis:
     steps: tuple[Step, ...]
     state: SpringState = field(repr=False)
     limit_interfaces: InterfaceResults | None = field(default=None, repr=False)
+    unloaded_limit: tuple[float, float, np.ndarray] | None = field(default=None, repr=False)
 
     @property
     def unstable_blocks(self) -> np.ndarray:

@@ -89,6 +89,10 @@ def factor_of_safety(
         hi_an = hi_an if hi_an is not None else first
         reached = hi_an.evidence.reached
         F = reached if reached is not None and reached < F else F / grow
+        # the failed search's equilibrium at the factor it reached (first load
+        # step, from the unloaded state) starts the analysis there
+        limit = hi_an.unloaded_limit
+        start = limit if limit is not None and limit[1] == F else None
         if F < smallest:
             return FactorOfSafety(
                 None,
@@ -99,7 +103,7 @@ def factor_of_safety(
                 hi_an,
                 _DEFINITION,
             )
-        a = analyse(system, strength_factor=F)
+        a = analyse(system, strength_factor=F, start=start)
         record(F, a)
         if a.stable:
             lo_an = a
