@@ -10,6 +10,10 @@ Cases (issue 2):
   system, the staged gravity analysis and the factor of safety, with the peak
   resident memory of a fresh process per size.
 
+* with ``--friction 15``, the same slopes failing under gravity (FS =
+  tan15/tan20 = 0.7362): the staged analysis is a failed search, and the
+  factor of safety is searched below it.
+
 * with ``--paths``, search-path cases (benchmarks/models/): models whose
   factor-of-safety search once crawled (a near-flat benched slope).
 
@@ -75,14 +79,14 @@ def path_cases() -> None:
         print(f"| {path.stem} | {n:,} | {t:.1f} | {result} | {system.factorizer.count} |")
 
 
-def one_size(n: int, repeat: int, fos: bool) -> dict:
+def one_size(n: int, repeat: int, fos: bool, friction: float = 35.0) -> dict:
     """Run in a fresh process so that the peak memory belongs to this size."""
     import resource
 
     import rockdem as rd
     from rockdem import verification as V
 
-    model = V.brick_slope(n)
+    model = V.brick_slope(n, friction_angle=friction)
     t_build, system = _median_time(lambda: rd.build_system(model), repeat)
     t_an, an = _median_time(lambda: rd.analyse(system), repeat)
     row = dict(
@@ -127,12 +131,19 @@ def main() -> None:
     p.add_argument("--quick", action="store_true", help="one run each, sizes 1000 and 3000")
     p.add_argument("--one", type=int, help=argparse.SUPPRESS)
     p.add_argument("--paths", action="store_true", help="only the search-path cases (models/)")
+    p.add_argument(
+        "--friction",
+        type=float,
+        default=35.0,
+        help="friction angle of the brick slopes (15: they fail under gravity, FS 0.736)",
+    )
     args = p.parse_args()
     if args.paths:
         path_cases()
         return
     if args.one:
-        print(json.dumps(one_size(args.one, args.repeat, args.one <= args.fos_up_to)))
+        fos = args.one <= args.fos_up_to
+        print(json.dumps(one_size(args.one, args.repeat, fos, args.friction)))
         return
     if args.quick:
         args.sizes, args.repeat = [1000, 3000], 1
@@ -162,6 +173,8 @@ def main() -> None:
             str(args.repeat),
             "--fos-up-to",
             str(args.fos_up_to),
+            "--friction",
+            str(args.friction),
         ]
         out = subprocess.run(cmd, capture_output=True, text=True, check=True).stdout
         r = json.loads(out.strip().splitlines()[-1])

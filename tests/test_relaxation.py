@@ -140,9 +140,11 @@ def test_bedded_slope_mechanism_slides_along_the_bedding_for_any_schedule():
 def test_the_failed_state_is_that_of_the_limit_not_of_the_trial():
     """Issue 10: the failed analysis of a factor-of-safety search is the state
     where equilibrium was lost (the top of the bracket), whatever trial
-    target the search tried: the wedge (the paper's Eq. 7) with a large
-    growth step still reports its failed state within the bracket."""
-    fos = rd.factor_of_safety(V.two_block_wedge(35, 30), grow=3.0)
+    target the search tried: the stable wedge (the paper's Eq. 7, phi1 =
+    36: FS 1.005) with a large growth step still reports its failed state
+    within the bracket.  (The unstable 35/30 wedge no longer tests this: its
+    first trial is where the gravity analysis lost equilibrium.)"""
+    fos = rd.factor_of_safety(V.two_block_wedge(36, 30), grow=3.0)
     lo, hi = fos.bracket
     assert fos.failed_analysis.strength_factor == pytest.approx(hi, rel=1e-12)
     assert hi - lo <= 0.005

@@ -340,7 +340,8 @@ def test_a_search_below_an_unstable_gravity_state_starts_where_it_stopped(monkey
     reached equilibrium up to a strength factor just below that.  The factor
     of safety then analyses the slope at that factor: from that equilibrium,
     not from scratch (a 1,021-block slope: 721 -> 448 factorisations, the
-    same factor of safety)."""
+    same factor of safety), and tries first where that search lost
+    equilibrium (448 -> 356)."""
     from rockdem import continuation
 
     system = rd.build_system(V.brick_slope(100, friction_angle=15))
@@ -361,4 +362,5 @@ def test_a_search_below_an_unstable_gravity_state_starts_where_it_stopped(monkey
     monkeypatch.setattr(continuation, "_release", release)
     fos = rd.factor_of_safety(system)
     assert reached not in released and 1.0 in released
+    assert [t.factor for t in fos.trials[:3]] == [1.0, reached, first.evidence.failed_at]
     assert fos.value == pytest.approx(np.tan(np.radians(15)) / np.tan(np.radians(20)), rel=0.01)

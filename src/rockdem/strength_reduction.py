@@ -47,7 +47,10 @@ def factor_of_safety(
     The loads are first applied in steps at ``start`` (default 1); each
     further trial factor continues from the converged state at the largest
     factor found stable so far (x ``grow`` after a success, bisection after
-    a failure) until the bracket is narrower than ``width``.
+    a failure) until the bracket is narrower than ``width``.  Where the
+    loads fail at ``start``, the search goes on below it from the
+    equilibrium the failed analysis reached (its first load step), and the
+    first trial is the factor where that analysis lost equilibrium.
 
     Returns
     -------
@@ -114,6 +117,8 @@ def factor_of_safety(
     #    factor just beyond that failed: both narrow the bracket at once.
     stage = max(step.stage for step in lo_an.steps)  # trials follow the load steps
     hi_F = hi_an.strength_factor if hi_an is not None else np.inf
+    # where the failed analysis's own search lost equilibrium: the first trial
+    hint = hi_an.evidence.failed_at if hi_an is not None else None
     if hi_an is not None and hi_an.evidence.proof != "lp-certificate":
         # a staged analysis that stalled without proof bounds nothing: the
         # continuation from the stable state decides (and may pass it)
@@ -135,6 +140,9 @@ def factor_of_safety(
                     )
             else:
                 F = 0.5 * (lo_an.strength_factor + hi_F)
+            if hint is not None and lo_an.strength_factor < hint < F:
+                F = hint
+            hint = None
             stage += 1
             a, sol = _continue(system, lo_an, F, stage, resolution=width / 4)
             record(F, a)
