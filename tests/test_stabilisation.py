@@ -81,8 +81,9 @@ def test_compare_measures_side_by_side():
     assert kinds == ["none", "support"]
     rows = c.rows()
     assert rows[0]["reaches_target"] is False and rows[1]["reaches_target"] is True
-    assert rows[1]["support_force"] == pytest.approx(wedge_thrust(200, 75, 37, 27, 35, 30, 35),
-                                                     rel=0.03)
+    assert rows[1]["support_force"] == pytest.approx(
+        wedge_thrust(200, 75, 37, 27, 35, 30, 35), rel=0.03
+    )
 
 
 def test_the_largest_support_force_of_the_model_file_is_used():
@@ -107,10 +108,11 @@ J = rd.Joint(normal_stiffness=1e5, friction_angle=40, name="j")
 
 @pytest.fixture(scope="module")
 def flat():
-    sets = [JointSet("bedding", 35, 1.0, J, origin=(0, 0.3)),
-            JointSet("cross", 90, 1.5, J, origin=(0.2, 0))]
-    g = generate_slope(Profile([(-10, 5), (6, 5)]), sets, depth=6, unit_weight=2.6,
-                       ground_joint=J)
+    sets = [
+        JointSet("bedding", 35, 1.0, J, origin=(0, 0.3)),
+        JointSet("cross", 90, 1.5, J, origin=(0.2, 0)),
+    ]
+    g = generate_slope(Profile([(-10, 5), (6, 5)]), sets, depth=6, unit_weight=2.6, ground_joint=J)
     return g.model()
 
 
@@ -124,9 +126,10 @@ def test_carry_state_onto_the_same_system_is_the_identity(flat):
 
 
 def test_excavation_in_stages_reports_failures_per_stage(flat):
-    stages = [Stage("bench 1", profile=((-10, 5), (-3, 5), (-2.3, 2.5), (6, 2.5))),
-              Stage("bench 2", profile=((-10, 5), (-3, 5), (-2.3, 2.5), (0, 2.5), (0.7, 0),
-                                         (6, 0)))]
+    stages = [
+        Stage("bench 1", profile=((-10, 5), (-3, 5), (-2.3, 2.5), (6, 2.5))),
+        Stage("bench 2", profile=((-10, 5), (-3, 5), (-2.3, 2.5), (0, 2.5), (0.7, 0), (6, 0))),
+    ]
     ex = excavate_in_stages(flat, stages)
     assert ex.stages[0].stable and ex.stages[0].removed_area == 0
     assert len(ex.stages) >= 2 and ex.stages[1].removed_area > 0
@@ -151,20 +154,30 @@ def app():
 
 
 def test_cli_json_and_files(app, tmp_path):
-    r = CliRunner().invoke(app, ["stabilise", "--example", "inclined-layers", "--no-support",
-                                 "--json", "--out", str(tmp_path / "res")])
+    r = CliRunner().invoke(
+        app,
+        [
+            "stabilise",
+            "--example",
+            "inclined-layers",
+            "--no-support",
+            "--json",
+            "--out",
+            str(tmp_path / "res"),
+        ],
+    )
     assert r.exit_code == 0, r.output
     doc = json.loads(r.stdout)
     assert doc["reached"] is True and doc["target_fos"] == 1.0
-    assert [d["design"] for d in doc["designs"]] == ["upper blocks", "all unstable blocks",
-                                                      "berm"]
+    assert [d["design"] for d in doc["designs"]] == ["upper blocks", "all unstable blocks", "berm"]
     files = {p.name for p in (tmp_path / "res").iterdir()}
     assert {"stabilisation.json", "removal.csv", "measures.csv", "trial-00.png"} <= files
 
 
 def test_cli_toppling_says_what_else_is_needed(app):
-    r = CliRunner().invoke(app, ["stabilise", "--example", "toppling", "--no-support",
-                                 "--target-fos", "1.3"])
+    r = CliRunner().invoke(
+        app, ["stabilise", "--example", "toppling", "--no-support", "--target-fos", "1.3"]
+    )
     assert r.exit_code == 0, r.output
     assert "NOT REACHED" in r.output and "toppling" in r.output and "needed instead" in r.output
 
@@ -182,8 +195,19 @@ def test_cli_results_appear_all_or_nothing(app, tmp_path, monkeypatch):
         raise OSError(28, "No space left on device")
 
     monkeypatch.setattr(stab, "save_pictures", full_disk)
-    r = CliRunner().invoke(app, ["stabilise", "--example", "inclined-layers", "--no-support",
-                                 "--quiet", "--out", str(out), "--overwrite"])
+    r = CliRunner().invoke(
+        app,
+        [
+            "stabilise",
+            "--example",
+            "inclined-layers",
+            "--no-support",
+            "--quiet",
+            "--out",
+            str(out),
+            "--overwrite",
+        ],
+    )
     assert r.exit_code != 0
     assert [p.name for p in out.iterdir()] == ["removal.csv"]
     assert (out / "removal.csv").read_text() == "the user's own table\n"
@@ -206,8 +230,9 @@ def test_cli_a_support_that_acts_on_no_block_names_the_file(app, tmp_path):
 
 @pytest.mark.parametrize("target", ["0", "-1", "nan", "1e9"])
 def test_cli_bad_target_is_an_input_error(app, target):
-    r = CliRunner().invoke(app, ["stabilise", "--example", "wedge-verification",
-                                 "--target-fos", target])
+    r = CliRunner().invoke(
+        app, ["stabilise", "--example", "wedge-verification", "--target-fos", target]
+    )
     assert r.exit_code == 2
     line = " ".join(r.output.split())
     # nan said "Input should be less than or equal to 20" (found by fuzzing)
@@ -241,8 +266,9 @@ def test_a_slope_that_never_fails_needs_no_support_and_says_so():
     force was sized (it was an error, exit 2, before)."""
     from rockdem.verification import block_on_plane
 
-    model = block_on_plane(np.degrees(np.arctan(1 / 18)),
-                           rd.Joint(normal_stiffness=1e6, friction_angle=45))
+    model = block_on_plane(
+        np.degrees(np.arctan(1 / 18)), rd.Joint(normal_stiffness=1e6, friction_angle=45)
+    )
     rows = {m.kind: m for m in compare_measures(model, 1.3).measures}
     assert rows["none"].reached and rows["support"].reached
     assert rows["support"].note.startswith("none sized: no failure mechanism")
@@ -255,3 +281,19 @@ def test_a_support_angle_pointing_out_of_the_rock_names_the_key():
     model, _ = load_model(example_path("inclined-layers"))
     with pytest.raises(rd.InputError, match=r"stabilisation\.support: the force at angle 15"):
         support_force(model, 1.0, angle=15.0)
+
+
+def test_a_trial_support_goes_on_the_slope_face_of_the_plane_failure_example():
+    """Found by fuzzing: the bundled plane failure (Hoek & Bray's slope with a
+    water-filled tension crack) crashed `rockdem stabilise`: its blocks'
+    union is two polygons (the sliding plane meets the ground only to
+    round-off), which has no single outline.  The trial support goes on the
+    sliding block's free surface: the 60 degree face, x = -y / tan 60."""
+    from rockdem.examples import example_path
+    from rockdem.stabilisation._edit import exposed_point
+
+    model, _ = load_model(example_path("plane-failure-water"))
+    moving = model.blocks.ids[~model.blocks.fixed]
+    x, y = exposed_point(model, moving)
+    assert 0.0 < y < 10.0
+    assert x == pytest.approx(-y / np.tan(np.radians(60.0)), abs=1e-6)

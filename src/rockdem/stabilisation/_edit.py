@@ -102,11 +102,17 @@ def exposed_point(model: Model, ids: Sequence[int]) -> tuple[float, float]:
     idx = b.index_of(np.atleast_1d(ids))
     polys = b.polygons()
     mass = shapely.union_all(polys[idx])
-    outline = shapely.union_all(polys).exterior
-    exposed = shapely.intersection(outline, mass.boundary)
+    # the mass's boundary away from every other block (the union of all the
+    # blocks need not be one polygon: contacts that meet only to round-off)
+    others = np.setdiff1d(np.arange(b.n_blocks), idx)
+    touching = shapely.buffer(shapely.union_all(polys[others]), 2 * b.tolerance)
+    exposed = shapely.difference(mass.boundary, touching)
     if exposed.is_empty or exposed.length == 0:
-        raise InputError("support", "the moving blocks have no free surface",
-                         "give the support position (at) explicitly")
+        raise InputError(
+            "support",
+            "the moving blocks have no free surface",
+            "give the support position (at) explicitly",
+        )
     centre = mass.centroid
     p = nearest_points(exposed, centre)[0]
     return float(p.x), float(p.y)
