@@ -88,15 +88,22 @@ def factor_of_safety(
     record(F, first)
     lo_an: Analysis | None = first if first.stable else None
     hi_an: Analysis | None = None if first.stable else first
+    below_smallest = 0
     while lo_an is None:  # unstable at the start: reduce from scratch
         hi_an = hi_an if hi_an is not None else first
         reached = hi_an.evidence.reached
-        F = reached if reached is not None and reached < F else F / grow
+        from_reached = reached is not None and reached < F
+        F = reached if from_reached else F / grow
         # the failed search's equilibrium at the factor it reached (first load
         # step, from the unloaded state) starts the analysis there
         limit = hi_an.unloaded_limit
         start = limit if limit is not None and limit[1] == F else None
-        if F < smallest:
+        # below ``smallest`` the search gives up, unless the failed analysis
+        # found equilibrium there: strength controls that mechanism (a block
+        # at phi 1 on a 20 degree plane: FS 0.048)
+        if F < smallest and from_reached and below_smallest < RESTARTS:
+            below_smallest += 1
+        elif F < smallest:
             return FactorOfSafety(
                 None,
                 (0.0, hi_an.strength_factor),
