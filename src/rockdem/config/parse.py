@@ -309,12 +309,34 @@ def _check_name(key: Any, source: str, where: str | None = None) -> None:
         )
 
 
+def _too_many_digits(text: str, source: str) -> ModelFileError:
+    """A number longer than Python converts (4,300 digits): where it is."""
+    m = re.search(r"\d{1000,}", text)
+    line = text[: m.start()].count("\n") + 1 if m else None
+    return ModelFileError(
+        source,
+        "",
+        "a number has thousands of digits (more than Python reads as an integer)",
+        "write it in scientific notation (e.g. 1e300) or correct it",
+        line,
+    )
+
+
 def parse_document(text: str, *, fmt: str = "yaml", source: str = "<string>") -> tuple[dict, Any]:
     """Parse the text of a model file (see :func:`read_document`)."""
-    nodes = None
     text = text.removeprefix("\ufeff")
     if len(text) > MAX_FILE_BYTES:
         raise _too_large(source, MAX_FILE_BYTES)
+    try:
+        return _parse_document(text, fmt, source)
+    except ValueError as exc:
+        if "integer string conversion" in str(exc):
+            raise _too_many_digits(text, source) from None
+        raise
+
+
+def _parse_document(text: str, fmt: str, source: str) -> tuple[dict, Any]:
+    nodes = None
     if fmt == "toml":
         try:
             data = tomllib.loads(text)
