@@ -72,6 +72,16 @@ def test_a_line_load_inside_a_block_is_refused():
     block_loads(blocks, rd.Loads(gravity=False, lines=(joint,)))
 
 
+def test_a_line_load_on_the_fixed_ground_alone_is_refused():
+    """Found by fuzzing: a line load on the ground's surface beside the
+    blocks pushed only into the fixed block, where it carries nothing, and
+    vanished from the loads without a word (a point load there is refused)."""
+    blocks = two_blocks()
+    beside = rd.LineLoad((-4.0, 0.0), (-1.0, 0.0), 0.0, -10.0, name="on the ground")
+    with pytest.raises(rd.InputError, match="on the ground: acts only on fixed blocks"):
+        block_loads(blocks, rd.Loads(gravity=False, lines=(beside,)))
+
+
 def test_a_trapezoid_in_a_model_file(tmp_path):
     from rockdem.config import parse_model
 

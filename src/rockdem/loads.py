@@ -34,7 +34,8 @@ def block_loads(blocks: Blocks, loads: Loads, *, support_scale: float = 1.0) -> 
     if loads.lines:
         pieces_xy, pieces_f, names = _split_line_loads(blocks, loads)
         if len(pieces_xy):
-            _add_forces(f, blocks, pieces_xy, pieces_f, names)
+            owner = _add_forces(f, blocks, pieces_xy, pieces_f, names)
+            _check_some_free(blocks, owner, names)
     return f
 
 
@@ -69,13 +70,30 @@ def _locate(
     return owner
 
 
-def _add_forces(f, blocks, xy, force, names, on_fixed: bool = True) -> None:
+def _add_forces(f, blocks, xy, force, names, on_fixed: bool = True) -> np.ndarray:
+    """Add the forces to the blocks they push into; returns those blocks."""
     owner = _locate(blocks, xy, force, names, on_fixed)
     r = xy - blocks.centroid[owner]
     moment = r[:, 0] * force[:, 1] - r[:, 1] * force[:, 0]
     np.add.at(f, (owner, 0), force[:, 0])
     np.add.at(f, (owner, 1), force[:, 1])
     np.add.at(f, (owner, 2), moment)
+    return owner
+
+
+def _check_some_free(blocks: Blocks, owner: np.ndarray, names: list[str]) -> None:
+    """A line load carried by fixed blocks alone holds or pushes nothing
+    (found by fuzzing: one on the ground's surface vanished silently); one
+    partly on the ground, like a surcharge across the crest, is fine."""
+    for name in dict.fromkeys(names):
+        mine = owner[[k for k, n in enumerate(names) if n == name]]
+        if blocks.fixed[mine].all():
+            raise InputError(
+                name,
+                f"acts only on fixed blocks (block {blocks.ids[mine[0]]}), where it "
+                "would hold or push nothing",
+                "place it on a free block's boundary, pushing into that block",
+            )
 
 
 #: two-point Gauss rule on [0, 1]: exact for the force and the moment of a
