@@ -266,6 +266,39 @@ def test_toml_underscores_are_toml_numbers_but_quoted_ones_are_not(tmp_path):
     assert_refused(r, "joints.bedding.friction_angle", "expected a number")
 
 
+@pytest.mark.parametrize("name", ["m.yaml", "m.toml"])
+def test_a_number_of_thousands_of_digits_is_refused_at_its_line(tmp_path, name):
+    """Found by fuzzing: a 5,000-digit integer stopped the program with
+    Python's "Exceeds the limit (4300 digits)" (exit 1)."""
+    huge = "9" * 5000
+    if name.endswith(".toml"):
+        text = BOX_TOML.replace("friction_angle = 30", f"friction_angle = {huge}")
+    else:
+        text = BOX.replace("friction_angle: 30", f"friction_angle: {huge}")
+    line = next(i for i, t in enumerate(text.splitlines(), 1) if huge in t)
+    assert_refused(check(tmp_path, text, name), f"{name}:{line}:", "thousands of digits")
+
+
+@pytest.mark.parametrize(
+    "region,fragment",
+    [
+        ("[[-10, 7], [-6, 7], [-6, 12], [-10, 12]]", "holds the centroid of no listed block"),
+        ("[[0, 0], [1, 1], [2, 2]]", "is not a valid polygon"),
+        ("[[-10, 7], [-6, 12], [-6, 7], [-10, 12]]", "is not a valid polygon"),
+    ],
+)
+def test_a_removal_region_that_removes_nothing_is_refused(tmp_path, region, fragment):
+    """Found by fuzzing: on listed blocks (the wedge example) a region that
+    holds no block's centroid, a flat one and a self-crossing one were taken
+    silently (the bow tie removed a block); a generated slope refuses them."""
+    from rockdem.examples import example_path
+
+    text = example_path("wedge-verification").read_text(encoding="utf-8")
+    text += f"\nremove:\n  regions:\n    - {region}\n"
+    line = len(text.splitlines())
+    assert_refused(check(tmp_path, text), f"m.yaml:{line}: remove.regions[0]", fragment)
+
+
 def test_json_exponents_are_numbers(tmp_path):
     r = check(tmp_path, BOX.replace("normal_stiffness: 1.0e+6", "normal_stiffness: 1e6"))
     assert r.returncode == 0, r.stderr

@@ -364,3 +364,14 @@ def test_a_search_below_an_unstable_gravity_state_starts_where_it_stopped(monkey
     assert reached not in released and 1.0 in released
     assert [t.factor for t in fos.trials[:3]] == [1.0, reached, first.evidence.failed_at]
     assert fos.value == pytest.approx(np.tan(np.radians(15)) / np.tan(np.radians(20)), rel=0.01)
+
+
+def test_a_factor_of_safety_below_smallest_that_was_reached_is_found():
+    """Found by fuzzing: a block at phi 1 on a 20 degree plane (planar
+    sliding, Hoek & Bray: FS = tan 1 / tan 20 = 0.048, below the default
+    ``smallest`` of 0.05) was called strength-independent although the
+    failed gravity analysis found equilibrium at 0.048."""
+    model = V.block_on_plane(20.0, rd.Joint(normal_stiffness=1e6, friction_angle=1))
+    fos = rd.factor_of_safety(model)
+    assert fos.mode == "strength"
+    assert fos.value == pytest.approx(np.tan(np.radians(1)) / np.tan(np.radians(20)), rel=0.005)

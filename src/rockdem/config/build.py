@@ -209,7 +209,6 @@ def _check_count(cfg: ModelFile, source: str, nodes: Any, max_blocks: int | None
             _line(nodes, ("blocks",)),
         )
 
-
     for i, block in enumerate(cfg.blocks):
         k = len(block.vertices)
         if k > MAX_VERTICES:
@@ -261,7 +260,8 @@ def _check_stabilisation(model, cfg: ModelFile, source: str, nodes: Any) -> None
     def held(m):
         if not (~m.blocks.fixed).any():
             raise InputError(
-                "the design", "removes every free block: nothing is left to analyse",
+                "the design",
+                "removes every free block: nothing is left to analyse",
                 "remove fewer blocks",
             )
         check_held(m.blocks)  # the analysis of the design would find it singular
@@ -295,16 +295,26 @@ def _explicit_model(cfg: ModelFile, joints, loads, settings, name: str, position
     import shapely
 
     from ..blocks import Blocks
+    from ..geometry.cut import _as_region
     from ..model import Model
 
     assert cfg.blocks is not None
     specs = list(enumerate(cfg.blocks))
     removed = set(cfg.remove.blocks)
     specs = [(i, b) for i, b in specs if (i if b.id is None else b.id) not in removed]
+    for k, r in enumerate(cfg.remove.regions):
+        # as a generated slope's excavation would: a region is a valid polygon
+        # that takes a block away (found by fuzzing: self-crossing, flat and
+        # missing regions were taken silently)
+        region = _as_region(r, f"remove.regions {k}")
+        if not any(region.contains(shapely.Polygon(b.vertices).centroid) for _, b in specs):
+            raise InputError(
+                f"remove.regions {k}",
+                "holds the centroid of no listed block, so it removes none",
+                "enclose the centroid of every block to remove, or delete the region",
+            )
     if cfg.remove.regions and specs:
-        regions = shapely.union_all(
-            [shapely.make_valid(shapely.Polygon(r)) for r in cfg.remove.regions]
-        )
+        regions = shapely.union_all([shapely.Polygon(r) for r in cfg.remove.regions])
         keep = []
         for i, b in specs:
             if not regions.contains(shapely.Polygon(b.vertices).centroid):
@@ -424,6 +434,7 @@ def _from_engine(
     j = re.match(r"joint '(.+)' (\w+)$", where)
     js = re.match(r"joint set '(.+?)'(?: (\w+))?$", where)
     jl = re.match(r"joint_lines (\d+)$", where)
+    rr = re.match(r"remove\.regions (\d+)$", where)
     gs = re.match(r"generate_slope (\w+)$", where)  # an argument: the slope's key
     pr = re.match(r"Profile\.simple (\w+)$", where)  # a key of slope.profile
     bk = re.match(r"(bolts .+) (\w+)$", where)
@@ -442,6 +453,8 @@ def _from_engine(
         label = ""
     elif jl:
         loc, label = ("joint_lines", int(jl.group(1))), ""
+    elif rr:
+        loc, label = ("remove", "regions", int(rr.group(1))), ""
     elif cfg.blocks is not None and where.startswith("blocks ") and "," in where:
         loc, label = ("blocks",), where
     elif cfg.blocks is not None and m and int(m.group(1)) in ids:
