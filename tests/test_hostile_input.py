@@ -759,3 +759,25 @@ def test_a_destination_on_a_read_only_file_system_is_refused_before_work(tmp_pat
         pytest.skip("no read-only /proc here")
     r = inproc("example", "copy", "toppling", "/proc/1/x", cwd=tmp_path)
     assert_refused(r, "/proc/1", "not writable")
+
+
+def test_a_bench_height_above_the_slope_is_refused(tmp_path):
+    """Found by fuzzing: benches 100 m apart on a 10 m slope cut none, silently."""
+    from rockdem.geometry import Profile
+
+    with pytest.raises(rd.InputError, match="bench_height: 100 is not less than"):
+        Profile.simple(10, 60, bench_width=2, bench_height=100)
+    Profile.simple(10, 60, bench_width=2, bench_height=5)  # two lifts, one bench
+
+
+def test_a_slope_beyond_the_machines_memory_is_refused_whatever_the_limit(monkeypatch):
+    """Found by fuzzing: with the block limit raised to 1e12, a 1 mm spacing
+    (284 million blocks, about 7 TB) ran until the memory ran out.  Here the
+    machine is made to have 1 MB."""
+    from rockdem.geometry import JointSet, Profile, generate_slope, size
+
+    monkeypatch.setattr(size, "physical_memory", lambda: 1e6)
+    joint = rd.Joint(normal_stiffness=1e6, friction_angle=30)
+    sets = [JointSet("bedding", 20, 1.0, joint), JointSet("cross", 100, 1.0, joint)]
+    with pytest.raises(rd.InputError, match="more than this machine's"):
+        generate_slope(Profile.simple(10, 60), sets, depth=5, max_blocks=10**12)

@@ -141,21 +141,36 @@ class Profile:
         h = _positive(where, "height", height)
         a = float(face_angle)
         if not (math.isfinite(a) and 0.0 < a <= 90.0):
-            raise InputError(f"{where} face_angle", f"{face_angle} is out of range",
-                             "give an angle in (0, 90] degrees")
+            raise InputError(
+                f"{where} face_angle",
+                f"{face_angle} is out of range",
+                "give an angle in (0, 90] degrees",
+            )
         crest = h if crest_length is None else _positive(where, "crest_length", crest_length, True)
-        toe_len = 0.5 * h if toe_length is None else _positive(
-            where, "toe_length", toe_length, True)
+        toe_len = (
+            0.5 * h if toe_length is None else _positive(where, "toe_length", toe_length, True)
+        )
         bw = float(bench_width)
         if not (math.isfinite(bw) and bw >= 0.0):
-            raise InputError(f"{where} bench_width", f"{bench_width} is negative",
-                             "give a width >= 0")
+            raise InputError(
+                f"{where} bench_width", f"{bench_width} is negative", "give a width >= 0"
+            )
         run = 0.0 if a == 90.0 else 1.0 / math.tan(math.radians(a))
         if bw > 0:
             if bench_height is None:
-                raise InputError(f"{where} bench_height", "is missing for a benched slope",
-                                 "give the vertical distance between benches")
+                raise InputError(
+                    f"{where} bench_height",
+                    "is missing for a benched slope",
+                    "give the vertical distance between benches",
+                )
             bh = _positive(where, "bench_height", bench_height)
+            if bh >= h * (1 - 1e-9):  # found by fuzzing: no bench was cut, silently
+                raise InputError(
+                    f"{where} bench_height",
+                    f"{bench_height} is not less than the slope's height {height}, "
+                    "so no bench would be cut",
+                    "give a bench height below the height, or bench_width 0 for no benches",
+                )
             n_lifts = max(1, math.ceil(h / bh - 1e-9))
             lifts = np.full(n_lifts, bh)
             lifts[-1] = h - bh * (n_lifts - 1)

@@ -26,6 +26,7 @@ regular sets, which is all a limit needs.
 from __future__ import annotations
 
 import math
+import os
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -146,9 +147,18 @@ def check_size(estimate: SizeEstimate, max_blocks: int | None, section: shapely.
         return
     too_many = estimate.blocks > max_blocks
     too_many |= estimate.interfaces > INTERFACES_PER_BLOCK * max_blocks
-    if not too_many:
+    memory = physical_memory()
+    beyond_memory = memory is not None and estimate.memory > memory
+    if not (too_many or beyond_memory):
         return
     x0, y0, x1, y1 = section.bounds
+    if beyond_memory and not too_many:  # found by fuzzing: a limit of 1e12 blocks ran out of memory
+        raise InputError(
+            "generate_slope",
+            f"would cut the section ({x1 - x0:.6g} x {y1 - y0:.6g}) into {estimate.describe()}, "
+            f"more than this machine's {_bytes(memory).removeprefix('about ')} of memory",
+            "check the spacings, the profile and the depth",
+        )
     where = "generate_slope" if estimate.main_set is None else f"joint set {estimate.main_set!r}"
     cause = "trace_length" if estimate.by_trace_ends else "spacing"
     if estimate.by_trace_ends:
@@ -160,6 +170,14 @@ def check_size(estimate: SizeEstimate, max_blocks: int | None, section: shapely.
         f"check the {cause}, the profile and the depth, or raise the limit "
         "(`rockdem --max-blocks N ...`; max_blocks= in Python)",
     )
+
+
+def physical_memory() -> float | None:
+    """Bytes of physical memory, where the system says (None elsewhere)."""
+    try:
+        return float(os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES"))
+    except (AttributeError, ValueError, OSError):  # not POSIX
+        return None
 
 
 def _count(n: float) -> str:
