@@ -454,6 +454,10 @@ BAD = [
         {"inputs": {PHI: {"distribution": "lognormal", "mean": 1, "sd": 1e200}}},
         ["study.inputs.joints.plane.friction_angle", "sd / mean = 1e+200 is over 100"],
     ),
+    (  # underflowed to a zero spread: "cohesion: nan is not a finite number" (fuzzing)
+        {"inputs": {PHI: {"distribution": "lognormal", "mean": 10, "sd": 1e-300}}},
+        ["study.inputs.joints.plane.friction_angle", "sd / mean = 1e-301 is below 1e-09"],
+    ),
     (
         {"inputs": {PHI: {"distribution": "normal", "mean": 95, "sd": 1}}},
         ["study inputs at their medians", "joints.plane.friction_angle: 95", "out of range"],

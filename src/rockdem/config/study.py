@@ -26,6 +26,8 @@ MAX_SWEEP_STEPS = 1_000
 
 #: Largest coefficient of variation (sd / mean) of a lognormal input.
 MAX_LOGNORMAL_COV = 100.0
+#: ... and the smallest (below it the log-spread underflows to zero)
+MIN_LOGNORMAL_COV = 1e-9
 
 #: Parameters each distribution takes (all of them required).
 PARAMETERS: dict[str, tuple[str, ...]] = {
@@ -80,6 +82,13 @@ class InputSpec(_Section):
                 f"lognormal: sd / mean = {self.sd / self.mean:.3g} is over "
                 f"{MAX_LOGNORMAL_COV:g} (its values would span more orders of magnitude "
                 "than a rock property does); give a smaller sd"
+            )
+        if d == "lognormal" and self.sd < MIN_LOGNORMAL_COV * self.mean:
+            # sd = 1e-300 gave a log-spread of 0 and NaN samples (found by fuzzing)
+            raise ValueError(
+                f"lognormal: sd / mean = {self.sd / self.mean:.3g} is below "
+                f"{MIN_LOGNORMAL_COV:g}, too small to sample; give a larger sd, or the "
+                "value itself in the model (no study input)"
             )
         if self.min is not None and not self.min < self.max:
             raise ValueError(f"{d}: min = {self.min:g} must be < max = {self.max:g}")
