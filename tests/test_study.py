@@ -354,6 +354,30 @@ def test_a_killed_command_loses_nothing_and_the_rerun_finishes(tmp_path):
     )
 
 
+def test_a_resumed_study_runs_again_the_rows_it_could_not_have_written(tmp_path):
+    """Found by fuzzing: a hand-edited samples.csv was trusted on resuming.
+    A negative factor of safety entered the statistics, an index outside the
+    study or a row of -inf stopped it with an exception (exit 1), and a byte
+    that is not UTF-8 with UnicodeDecodeError.  Such rows are run again;
+    a file that is not text is refused."""
+    spec = normal_phi(samples=4, compute="fos")
+    out = tmp_path / "o"
+    table, _ = rockdem.study(plane_document(), spec, workers=0, out=out)
+    good = (out / "samples.csv").read_text(encoding="utf-8").splitlines()
+    header, rows = good[0], good[1:]
+    fs = header.split(",").index("fs")
+    bad = rows[0].split(",")
+    bad[fs] = "-5"
+    edited = [header, ",".join(bad), "-5" + rows[1][1:], "99999999999999999999" + rows[2][1:]]
+    (out / "samples.csv").write_text("\n".join(edited) + "\n", encoding="utf-8")
+    again, _ = rockdem.study(plane_document(), spec, workers=0, out=out)
+    same_table(again, table)
+    with open(out / "samples.csv", "ab") as fh:
+        fh.write(b"\xff\xfe\n")
+    with pytest.raises(rockdem.InputError, match=r"samples\.csv is not UTF-8 text"):
+        rockdem.study(plane_document(), spec, workers=0, out=out)
+
+
 def test_a_folder_of_another_study_is_refused(tmp_path):
     rockdem.study(
         plane_document(), normal_phi(samples=2, compute="verdict"), workers=0, out=tmp_path / "o"

@@ -109,6 +109,21 @@ def _value(text: str, kind: str) -> Any:
     return text
 
 
+def _plausible(row: dict, n_samples: int) -> bool:
+    """Could this study have written ``row``?  Its index is one of its samples
+    and its factors of safety are missing (NaN) or >= 0, finite except the
+    bracket's top (infinite where no failure was found)."""
+    if not 0 <= row["sample"] < n_samples:
+        return False
+    for column in ("fs", "fs_low", "fs_high"):
+        f = row.get(column)
+        if f is None or math.isnan(f):
+            continue
+        if f < 0 or (math.isinf(f) and column != "fs_high"):
+            return False
+    return True
+
+
 class Store:
     """Rows of one study, in memory and (with a folder) on disk."""
 
@@ -144,7 +159,7 @@ class Store:
                     "give another folder, or --overwrite to start this study afresh",
                 )
             if csv_path.exists():
-                self._read(csv_path)
+                self._read(csv_path, int(manifest.get("samples", 0)))
         elif not info.exists() and not overwrite:
             clash = clashing_file(folder)
             if clash:
@@ -163,9 +178,19 @@ class Store:
         self._fh = open(csv_path, "a", newline="", encoding="utf-8")
         self._writer = csv.writer(self._fh, lineterminator="\n")
 
-    def _read(self, path: Path) -> None:
-        with open(path, newline="", encoding="utf-8") as fh:
-            text = fh.read()
+    def _read(self, path: Path, n_samples: int) -> None:
+        """The rows of an earlier run of this study; a row that is not one this
+        study could have written (an index outside it, a negative or infinite
+        factor: a hand-edited file, found by fuzzing) is dropped and run again."""
+        try:
+            with open(path, newline="", encoding="utf-8") as fh:
+                text = fh.read()
+        except UnicodeDecodeError:
+            raise InputError(
+                f"--out {path.parent}",
+                "samples.csv is not UTF-8 text (was it edited?)",
+                "give another folder, or --overwrite to start this study afresh",
+            ) from None
         complete = text if text.endswith("\n") else text[: text.rfind("\n") + 1]
         lines = list(csv.reader(complete.splitlines()))
         if not lines:
@@ -184,6 +209,8 @@ class Store:
                     c: _value(t, self.kinds[c]) for c, t in zip(self.columns, fields, strict=True)
                 }
             except ValueError:
+                continue
+            if not _plausible(row, n_samples):
                 continue
             self.rows[row["sample"]] = row
 
