@@ -363,6 +363,14 @@ def _parse_document(text: str, fmt: str, source: str) -> tuple[dict, Any]:
             mark = exc.problem_mark or exc.context_mark
             line = mark.line + 1 if mark is not None else None
             problem = (exc.problem or exc.context or "syntax error").strip()
+            if "nesting depth" in problem:  # libyaml's own limit (PyYAML >= 6.0.4)
+                raise ModelFileError(
+                    source,
+                    "",
+                    f"nests lists and mappings more than {MAX_DEPTH} deep",
+                    "a model nests at most a few levels: check the brackets",
+                    line,
+                ) from None
             start = exc.context_mark
             if exc.context and start is not None and line is not None and start.line + 1 != line:
                 problem += f" ({exc.context} started at line {start.line + 1})"
