@@ -153,19 +153,14 @@ def app():
     return a
 
 
+def _stabilise_inclined_layers(app, *args):
+    """``rockdem stabilise --example inclined-layers --no-support ARGS``."""
+    base = ["stabilise", "--example", "inclined-layers", "--no-support"]
+    return CliRunner().invoke(app, [*base, *map(str, args)])
+
+
 def test_cli_json_and_files(app, tmp_path):
-    r = CliRunner().invoke(
-        app,
-        [
-            "stabilise",
-            "--example",
-            "inclined-layers",
-            "--no-support",
-            "--json",
-            "--out",
-            str(tmp_path / "res"),
-        ],
-    )
+    r = _stabilise_inclined_layers(app, "--json", "--out", tmp_path / "res")
     assert r.exit_code == 0, r.output
     doc = json.loads(r.stdout)
     assert doc["reached"] is True and doc["target_fos"] == 1.0
@@ -195,19 +190,7 @@ def test_cli_results_appear_all_or_nothing(app, tmp_path, monkeypatch):
         raise OSError(28, "No space left on device")
 
     monkeypatch.setattr(stab, "save_pictures", full_disk)
-    r = CliRunner().invoke(
-        app,
-        [
-            "stabilise",
-            "--example",
-            "inclined-layers",
-            "--no-support",
-            "--quiet",
-            "--out",
-            str(out),
-            "--overwrite",
-        ],
-    )
+    r = _stabilise_inclined_layers(app, "--quiet", "--out", out, "--overwrite")
     assert r.exit_code != 0
     assert [p.name for p in out.iterdir()] == ["removal.csv"]
     assert (out / "removal.csv").read_text() == "the user's own table\n"
