@@ -89,7 +89,7 @@ def test_compare_measures_side_by_side():
 def test_the_largest_support_force_of_the_model_file_is_used():
     """``stabilisation.support.largest`` caps the search (it was read, then
     not passed on: found by fuzzing): the wedge's Eq. 7 thrust is out of
-    reach below it, and the note says up to where it looked."""
+    reach below it, and the note says up to where it looked and why."""
     model = two_block_wedge(35, 30)
     at = (10.0, -10 * np.tan(np.radians(27)) + 1.0)
     exact = wedge_thrust(200, 75, 37, 27, 35, 30, 35)
@@ -100,6 +100,8 @@ def test_the_largest_support_force_of_the_model_file_is_used():
     assert row.kind == "support" and not row.reached
     bound = float(re.search(r"not reached up to ([0-9.e+]+)", row.note).group(1))
     assert bound == pytest.approx(exact / 2, rel=0.005)  # the cap, as the note rounds it
+    # ... and blames the cap, not the mechanism (it said "a single force cannot hold it")
+    assert "the largest force allowed" in row.note and "cannot hold" not in row.note
 
 
 # -------------------------------------------------------------- stages

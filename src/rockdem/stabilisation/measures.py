@@ -252,9 +252,14 @@ def compare_measures(
             )
         at = f"({search.at[0]:.2f}, {search.at[1]:.2f})"
         if search.force is None:
+            why = (
+                "twice the free blocks' weight: a single force cannot hold the mechanism"
+                if support_largest is None
+                else "the largest force allowed (support.largest)"  # the user's cap, fuzzing
+            )
             note = (
                 f"at {at}, angle {search.angle:g}: not reached up to "
-                f"{search.bracket[0]:.3g}{force_unit} (a single force cannot hold the mechanism)"
+                f"{search.bracket[0]:.3g}{force_unit} ({why})"
             )
             rows.append(Measure("support", "support force", 0.0, None, None, False, note, None))
         else:
