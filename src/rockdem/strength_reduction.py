@@ -167,6 +167,12 @@ def factor_of_safety(
         if hi_an is None or hi_an.evidence.certified is not None:
             break
         hi_an, trials = prove_failed_trial(system, hi_an, lo_an.state, hi, trials)
+        if not hi_an.evidence.certified and hi < lo + width:
+            # Newton lost equilibrium a little below the LP's limit: a proof
+            # within the bracket width the caller accepts settles it as well
+            wider, more = prove_failed_trial(system, hi_an, lo_an.state, lo + width, trials)
+            if wider.evidence.certified:
+                hi_an, trials, hi = wider, more, lo + width
         hi_an, trials, run, beyond = confirm_failed_trial(system, hi_an, lo_an, hi, trials)
         found = run.status == "equilibrium"
         if (
