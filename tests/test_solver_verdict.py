@@ -206,6 +206,115 @@ def test_lp_in_a_region_still_proves_failure():
     assert not admissible_load(system, state, 1.0, exact * 0.997, region=region).proves_failure
 
 
+def _textbook_lp(system, state, factor):
+    """The LP as METHOD.md writes it: forces (N, S) per spring point, the
+    strength limits as inequality rows, N >= -T as a bound."""
+    import scipy.sparse as sp
+    from scipy.optimize import linprog
+
+    from rockdem.spring_law import strength
+
+    asm, springs = system.assembly, system.springs
+    f = system.f_ext * asm.dof_scale
+    c, tan_phi, tensile = strength(springs, state, factor)
+    w, n = springs.weight, springs.n_springs
+    op = sp.csr_array(asm.operator)
+    scale = sp.diags_array(asm.dof_scale)
+    A_eq = sp.hstack([scale @ -(op[0::2].T), scale @ op[1::2].T, sp.csr_array(-f[:, None])])
+    T, eye, zero = sp.diags_array(tan_phi), sp.eye_array(n), sp.csr_array((n, 1))
+    A_ub = sp.vstack([sp.hstack([-T, eye, zero]), sp.hstack([-T, -eye, zero])])
+    bounds = [(-t * wi, None) for t, wi in zip(tensile, w, strict=True)]
+    bounds += [(None, None)] * n + [(0.0, 2.0)]
+    cost = np.zeros(2 * n + 1)
+    cost[-1] = -1.0
+    res = linprog(
+        cost,
+        A_ub=A_ub,
+        b_ub=np.concatenate([c * w, c * w]),
+        A_eq=A_eq,
+        b_eq=np.zeros(asm.n_dof),
+        bounds=bounds,
+        method="highs",
+    )
+    assert res.status == 0
+    return res.x[-1]
+
+
+@pytest.mark.parametrize(
+    ("phi", "cohesion", "tensile"),
+    [(30, 0, 0), (30, 5, 0), (30, 5, 2), (30, 5, 50), (0, 5, 2), (20, 0, 3)],
+)
+def test_the_lp_in_bound_form_is_the_textbook_lp(phi, cohesion, tensile):
+    """rockdem writes each spring point's force on the edges of its strength
+    polygon (every limit a bound: 0.1 s instead of 8 s at 8,955 points); its
+    largest load multiple equals that of METHOD.md's LP (strength limits as
+    rows) to 1e-6, with a tension cut-off inside the cone (T < c / tan phi),
+    beyond its apex (T > c / tan phi: the apex cuts it), without friction and
+    without cohesion, on the seed paper's two-block wedge."""
+    wedge = V.two_block_wedge(35, 30)
+    joints = [
+        rd.Joint(
+            normal_stiffness=j.normal_stiffness,
+            friction_angle=phi,
+            cohesion=cohesion,
+            tensile_strength=tensile,
+            name=j.name,
+        )
+        for j in wedge.joints
+    ]
+    for model in (replace(wedge, joints=joints), _hanging_block(joints[0])):
+        system = rd.build_system(model)
+        state = SpringState.initial(system.springs.n_springs)
+        for factor in (0.5, 0.9, 1.0, 1.2, 2.0, 4.0):
+            mu = admissible_load(system, state, 1.0, factor).mu
+            assert mu == pytest.approx(_textbook_lp(system, state, factor), abs=1e-6)
+
+
+def _hanging_block(joint):
+    """A 2 x 1 block (unit weight 25: W = 50) under a fixed roof, held by its
+    2 m long top joint alone."""
+    roof = [(-4, 0), (4, 0), (4, 1), (-4, 1)]
+    block = [(0, -1), (2, -1), (2, 0), (0, 0)]
+    blocks = rd.Blocks.from_polygons([roof, block], fixed=[True, False], unit_weight=25)
+    return rd.Model(blocks, joint)
+
+
+@pytest.mark.parametrize(
+    ("phi", "cohesion", "tensile", "stress"),
+    [(30, 5, 2, 2), (30, 5, 50, 5 / np.tan(np.radians(30))), (0, 5, 2, 2), (30, 0, 3, 0)],
+)
+def test_the_lp_holds_a_hanging_block_by_the_tension_cut_off(phi, cohesion, tensile, stress):
+    """A block hanging from a roof: the joint carries at most ``T L`` (the
+    tension cut-off), or ``(c / tan phi) L`` where the Mohr-Coulomb envelope
+    reaches zero shear strength first (its apex; none without cohesion), so
+    the LP's load multiple is that times L / W, at F = 1 and at F = 2 (the
+    tensile strength reduced with c and tan phi: the apex does not move)."""
+    joint = rd.Joint(
+        normal_stiffness=1e6, friction_angle=phi, cohesion=cohesion, tensile_strength=tensile
+    )
+    system = rd.build_system(_hanging_block(joint))
+    state = SpringState.initial(system.springs.n_springs)
+    L, W = 2.0, 50.0
+    assert admissible_load(system, state, 1.0, 1.0).mu == pytest.approx(stress * L / W)
+    at_two = min(tensile / 2, stress) if cohesion and phi else stress / 2
+    assert admissible_load(system, state, 1.0, 2.0).mu == pytest.approx(at_two * L / W)
+
+
+def test_a_slope_beyond_the_old_lp_size_is_proven_within_the_width():
+    """A 1,021-block brick slope (8,955 spring points: the LP was skipped
+    above 4,000, and the failure only confirmed by dynamic relaxation): the
+    top of the bracket is proven by the LP, the bracket is at most the
+    width and holds Hoek & Bray's tan 35 / tan 20."""
+    model = V.brick_slope(1000)
+    assert rd.build_system(model).springs.n_springs > 4_000
+    fos = rd.factor_of_safety(model)
+    exact = np.tan(np.radians(35)) / np.tan(np.radians(20))
+    assert fos.proof == "lp-certificate"
+    assert fos.bracket[1] - fos.bracket[0] <= 0.005 * (1 + 1e-9)
+    assert fos.bracket[0] <= exact <= fos.bracket[1]
+    assert fos.certified_upper_bound == pytest.approx(fos.bracket[1])
+
+
 NEEDLE = """
 units: kN, m, kPa
 materials: {r: {unit_weight: 25}}
