@@ -311,11 +311,11 @@ def _stall_check(system: System, state: SpringState, lam: float, factor: float, 
     unbalanced force keeps falling).
 
     On small models the LP (:mod:`rockdem.certificate`) comes first at
-    ``factor``; on models of any size it is then tried at ``within`` (a
-    cohesionless slope's failure there is proven in the time of about ten
+    ``factor``; then, before a relaxation, at ``within`` (a cohesionless
+    slope's failure there is proven in the time of about fifteen
     factorisations, where the relaxation took 8,000 explicit steps: 2,952
     blocks, 0.3 s against 5 s; an LP that would take longer gives up).  On
-    large ones (a segment of under STALL_CHECK_MIN steps) nothing runs:
+    large models (a segment of under STALL_CHECK_MIN steps) nothing runs:
     such short runs were undecided (9,638 blocks: 1,383 steps, 3.8 s), and
     the confirmation beyond the bracket, which sends the search on when it
     finds equilibrium there, is run anyway.
@@ -325,9 +325,9 @@ def _stall_check(system: System, state: SpringState, lam: float, factor: float, 
     if system.springs.n_springs <= LP_FIRST_SPRINGS:
         if admissible_load(system, state, lam, factor).proves_failure:
             return None
-    if within is not None and certificate_for(system, state, lam, within).proves_failure:
-        return None
     if not stall_checked(system.assembly.n_dof):
+        return None  # (the search's end proves or confirms the failure anyway)
+    if within is not None and certificate_for(system, state, lam, within).proves_failure:
         return None
     segment = int(min(STALL_CHECK_WORK / system.assembly.n_dof, 4_000))
     return relax(system, state, lam, factor, q0, max_steps=segment, extend=True)
