@@ -167,7 +167,7 @@ def factor_of_safety(
         if hi_an is None or hi_an.evidence.certified is not None:
             break
         hi_an, trials = prove_failed_trial(system, hi_an, lo_an.state, hi, trials)
-        for top in (min(hi + width / 8, lo + width), lo + width):
+        for top in sorted({min(hi + width / 8, lo + width), lo + width}):
             if hi_an.evidence.certified or top <= hi:
                 break
             # Newton lost equilibrium a little below the LP's limit: a proof
