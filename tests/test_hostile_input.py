@@ -770,6 +770,33 @@ def test_a_bench_height_above_the_slope_is_refused(tmp_path):
     Profile.simple(10, 60, bench_width=2, bench_height=5)  # two lifts, one bench
 
 
+def test_a_bench_height_of_a_micrometre_is_refused_at_once(tmp_path):
+    """Found by fuzzing: benches 1e-6 apart on a 100 m slope (1e8 benches)
+    built the profile point by point until 5.6 GB ran out (exit 1)."""
+    text = SLOPE.replace(
+        "profile: {height: 6, face_angle: 60}",
+        "profile: {height: 100, face_angle: 60, bench_width: 2, bench_height: 1.0e-6}",
+    )
+    r = assert_refused(check(tmp_path, text), "bench_height", "100,000,000 benches")
+    assert "at least 0.01" in r
+
+
+def test_two_study_inputs_on_one_number_are_refused(tmp_path):
+    """Found by fuzzing: `joints.cross.friction_angle` and the same path with
+    a trailing space (or `[*]` and `[0]` of one list) both set one number;
+    the later won and samples.csv reported values never used."""
+    inputs = (
+        "study:\n  samples: 2\n  inputs:\n"
+        "    joints.cross.friction_angle: {distribution: normal, mean: 35, sd: 2}\n"
+        '    "joints.cross.friction_angle ": {distribution: normal, mean: 30, sd: 2}\n'
+    )
+    (tmp_path / "m.yaml").write_text(SLOPE + inputs, encoding="utf-8")
+    r = inproc("study", "m.yaml", "--out", "o", "--workers", "0", cwd=tmp_path)
+    line = assert_refused(r, "study.inputs.joints.cross.friction_angle", "sets too")
+    assert "only one of them would be used" in line
+    assert not (tmp_path / "o").exists()
+
+
 def test_a_slope_beyond_the_machines_memory_is_refused_whatever_the_limit(monkeypatch):
     """Found by fuzzing: with the block limit raised to 1e12, a 1 mm spacing
     (284 million blocks, about 7 TB) ran until the memory ran out.  Here the

@@ -15,6 +15,9 @@ import shapely
 
 from ..errors import InputError
 
+#: a benched profile has at most this many benches (each is two profile points)
+MAX_BENCHES = 10_000
+
 __all__ = ["Profile"]
 
 
@@ -172,6 +175,13 @@ class Profile:
                     "give a bench height below the height, or bench_width 0 for no benches",
                 )
             n_lifts = max(1, math.ceil(h / bh - 1e-9))
+            if n_lifts > MAX_BENCHES:  # found by fuzzing: 1e8 benches filled the memory
+                raise InputError(
+                    f"{where} bench_height",
+                    f"{bench_height} cuts the {height} high slope into {n_lifts:,} benches, "
+                    f"more than {MAX_BENCHES:,}",
+                    f"give a bench height of at least {h / MAX_BENCHES:.4g}",
+                )
             lifts = np.full(n_lifts, bh)
             lifts[-1] = h - bh * (n_lifts - 1)
         else:

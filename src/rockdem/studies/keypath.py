@@ -140,11 +140,12 @@ def check_paths(doc: dict, names: list[str], section: str, source: str, nodes: A
     from ..config.errors import _line
 
     out = []
+    owner: dict[Loc, str] = {}  # each number of the model is set by one input
     for name in names:
+        loc = ("study", section, name)
         try:
-            out.append(resolve(doc, name))
+            places = resolve(doc, name)
         except ValueError as exc:
-            loc = ("study", section, name)
             raise ModelFileError(
                 source,
                 f"study.{section}.{name}",
@@ -153,6 +154,18 @@ def check_paths(doc: dict, names: list[str], section: str, source: str, nodes: A
                 "`joints.bedding.friction_angle` or `loads.water_table[*][1]`",
                 _line(nodes, loc),
             ) from None
+        for place in places:  # found by fuzzing: the later input won, silently
+            other = owner.setdefault(place, name)
+            if other != name:
+                raise ModelFileError(
+                    source,
+                    f"study.{section}.{name}",
+                    f"sets `{_keypath(place)}`, which `{other.strip()}` sets too "
+                    "(only one of them would be used)",
+                    "vary each number of the model by one input: remove one of the two",
+                    _line(nodes, loc),
+                )
+        out.append(places)
     return out
 
 
