@@ -647,3 +647,33 @@ def test_results_never_write_over_the_models_drawing(tmp_path):
     assert res.exit_code == 2, res.output
     assert "would write result.dxf over" in res.output
     assert dxf.read_bytes() == before
+
+
+def test_a_grid_of_traces_beyond_the_block_limit_is_refused_before_the_cut(tmp_path):
+    """Found by fuzzing: 1,500 x 1,500 crossing traces (3,000 segments, within
+    the segment limit) cut 2.25 million blocks, and noding them ran out of
+    memory (5.6 GB, exit 1) before the block limit was checked.  The
+    crossings are now counted first (Euler: at least crossings - traces
+    blocks).  Here 120 x 120 traces against a limit of 10,000 blocks; the
+    same grid within a limit of 20,000 is cut (14,400 blocks, more than
+    the 14,160 the count promises)."""
+    import time
+
+    from rockdem.exchange.dxf_entities import DxfError
+
+    v = [
+        [(1.0 + 21.5 * (i + 0.5) / 120, -4.0), (1.0 + 21.5 * (i + 0.5) / 120, 9.0)]
+        for i in range(120)
+    ]
+    h = [
+        [(0.5, -2.9 + 2.8 * (j + 0.5) / 120), (23.5, -2.9 + 2.8 * (j + 0.5) / 120)]
+        for j in range(120)
+    ]
+    path = draw(tmp_path, traces={"bedding": v, "cross": h}, water=None)
+    section = read_section(path)
+    start = time.monotonic()
+    counted = "cross each other at least 14,400 times: they would cut at least 14,160"
+    with pytest.raises(DxfError, match=counted):
+        cut_section(section, max_blocks=10_000)
+    assert time.monotonic() - start < 5.0
+    assert len(cut_section(section, max_blocks=20_000).polygons) > 14_160
