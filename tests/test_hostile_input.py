@@ -797,6 +797,53 @@ def test_two_study_inputs_on_one_number_are_refused(tmp_path):
     assert not (tmp_path / "o").exists()
 
 
+PLANE_20 = """units: kN, m, kPa
+materials: {r: {unit_weight: 25}}
+joints:
+  strong: {normal_stiffness: 1.0e+6, friction_angle: 30}
+  weak: {normal_stiffness: 1.0e+6, friction_angle: 10}
+joint_lines:
+  - {joint: weak, point: [0, OFFSET], dip: 20}
+blocks:
+  - {fixed: true, vertices: [[-10, 3.6397023426620234], [10, -3.6397023426620234], [10, -10],
+                             [-10, -10]]}
+  - {material: r, vertices: [[-2, 0.7279404685324047], [2, -0.7279404685324047],
+                             [2, 1.2720595314675953], [-2, 2.7279404685324047]]}
+"""
+
+
+@pytest.mark.parametrize("offset", ["0.001", "0"])
+def test_a_joint_line_along_no_contact_is_warned_about(tmp_path, offset):
+    """Found by fuzzing: a weak joint (phi 10) meant for the base of a block
+    on a 20 degree plane, drawn 1 mm off it, left the base on the strong
+    default (phi 30): STABLE instead of UNSTABLE (tan 10 < tan 20), silently.
+    Now a warning names the line; on the base itself there is none."""
+    (tmp_path / "m.yaml").write_text(PLANE_20.replace("OFFSET", offset), encoding="utf-8")
+    r = inproc("run", "m.yaml", cwd=tmp_path)
+    assert r.returncode == 0
+    warned = [ln for ln in r.stderr.splitlines() if ln.startswith("warning: ")]
+    if offset == "0":
+        assert not warned and "UNSTABLE" in r.stdout
+    else:
+        assert warned == [
+            "warning: m.yaml:7: joint_lines[0] (joint weak) lies along no contact between "
+            "blocks: it gives its joint to none; check its points if it was meant for one"
+        ]
+        assert "STABLE" in r.stdout
+
+
+def test_an_imported_section_names_its_traces_along_no_contact_in_one_line(tmp_path):
+    """The bundled section's traces run on through the fixed ground, where
+    they give no joint to any contact (18 of the 44 segments; a DXF round
+    trip keeps them all): one warning line says so, not eighteen."""
+    r = inproc("import", "--example", "--bolt-force", "100", "-o", "m.yaml", cwd=tmp_path)
+    assert r.returncode == 0
+    r = inproc("check", "m.yaml", cwd=tmp_path)
+    assert r.returncode == 0
+    warned = [ln for ln in r.stderr.splitlines() if ln.startswith("warning: ")]
+    assert len(warned) == 1 and "18 of the 44 joint lines" in warned[0], r.stderr
+
+
 def test_a_slope_beyond_the_machines_memory_is_refused_whatever_the_limit(monkeypatch):
     """Found by fuzzing: with the block limit raised to 1e12, a 1 mm spacing
     (284 million blocks, about 7 TB) ran until the memory ran out.  Here the

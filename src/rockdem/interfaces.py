@@ -233,6 +233,28 @@ def _unheld(blocks: Blocks, faces: Interfaces) -> np.ndarray:
     return np.flatnonzero(~held & ~blocks.fixed)
 
 
+def _along_lines(faces: Interfaces, blocks: Blocks, lines) -> tuple[np.ndarray, np.ndarray]:
+    """(interface, line) pairs where the whole interface lies on the line."""
+    lines = np.asarray(lines, dtype=float).reshape(-1, 2, 2)
+    tol = blocks.tolerance * 10
+    f, g = _on_lines(faces, lines, tol)
+    if f.size:  # both ends within tol, not only the midpoint
+        geoms = shapely.linestrings(lines)
+        ends = shapely.distance(shapely.points(faces.start[f]), geoms[g]) <= tol
+        ends &= shapely.distance(shapely.points(faces.end[f]), geoms[g]) <= tol
+        f, g = f[ends], g[ends]
+    return f, g
+
+
+def lines_along_no_contact(faces: Interfaces, blocks: Blocks, lines) -> np.ndarray:
+    """Indices of the joint ``lines`` along which no interface lies: their
+    joint is used nowhere (a line drawn 1 mm off the contact it was meant for)."""
+    if lines is None or not len(lines):
+        return np.zeros(0, dtype=np.int64)
+    _, g = _along_lines(faces, blocks, lines)
+    return np.setdiff1d(np.arange(len(np.asarray(lines).reshape(-1, 2, 2))), g)
+
+
 def assign_joints(
     faces: Interfaces,
     blocks: Blocks,
@@ -251,16 +273,9 @@ def assign_joints(
     """
     joint = np.full(faces.n_interfaces, default, dtype=np.int64)
     if lines is not None and len(lines):
-        lines = np.asarray(lines, dtype=float).reshape(-1, 2, 2)
         line_joint = np.asarray(line_joint, dtype=np.int64)
-        tol = blocks.tolerance * 10
-        geoms = shapely.linestrings(lines)
-        f, g = _on_lines(faces, lines, tol)
+        f, g = _along_lines(faces, blocks, lines)
         if f.size:
-            # the whole interface must lie on the line: both ends within tol
-            ends = shapely.distance(shapely.points(faces.start[f]), geoms[g]) <= tol
-            ends &= shapely.distance(shapely.points(faces.end[f]), geoms[g]) <= tol
-            f, g = f[ends], g[ends]
             # first listed line wins: per interface keep the smallest line index
             order = np.lexsort((g, f))
             first = np.ones(len(order), dtype=bool)

@@ -4,6 +4,8 @@ errors and exit codes, loading the model, progress bars and JSON output."""
 from __future__ import annotations
 
 import json
+import logging
+import sys
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
@@ -140,6 +142,24 @@ def _root(
 ) -> None:
     """Stability of jointed rock slopes by the discrete element method."""
     _ROOT["max_blocks"] = max_blocks
+    _show_warnings()
+
+
+class _WarningLine(logging.Handler):
+    """rockdem's logged warnings as ``warning: ...`` lines on the current stderr."""
+
+    def emit(self, record: logging.LogRecord) -> None:
+        text = " ".join(record.getMessage().split())  # one line, whatever the message
+        print(f"warning: {text}", file=sys.stderr)
+
+
+def _show_warnings() -> None:
+    """Print what rockdem logs at WARNING and above (once per process)."""
+    logger = logging.getLogger("rockdem")
+    if not any(isinstance(h, _WarningLine) for h in logger.handlers):
+        handler = _WarningLine(logging.WARNING)
+        logger.addHandler(handler)
+        logger.propagate = False
 
 
 # ------------------------------------------------------------------ errors

@@ -3,6 +3,7 @@ errors back to the key path at fault."""
 
 from __future__ import annotations
 
+import logging
 import math
 import re
 from dataclasses import replace
@@ -13,10 +14,12 @@ import numpy as np
 
 from ..errors import InputError
 from ..geometry.size import MAX_BLOCKS, memory_for
-from ..interfaces import check_held
+from ..interfaces import check_held, lines_along_no_contact
 from .errors import Loc, ModelFileError, _keypath, _line
 from .sections import ProfileSpec
 from .spec import ModelFile
+
+log = logging.getLogger(__name__)
 
 
 def _unit_weight(cfg: ModelFile, material: str | None, value: float | None) -> float | None:
@@ -164,6 +167,7 @@ def build_model(
     """
     names: dict[str, Loc] = {}
     ids: dict[int, int] = {}  # block id -> position in `blocks`
+    own_lines = len(cfg.joint_lines or ())  # a drawing's traces come after them
     try:
         if cfg.geometry is not None:  # a drawn section: its blocks, as if listed
             from .geometry import with_dxf_blocks
@@ -184,16 +188,47 @@ def build_model(
         from ..solver import build_system
 
         try:
-            build_system(model)  # interfaces, springs, loads on blocks: every input check
+            system = build_system(model)  # interfaces, springs, loads on blocks: every check
         except InputError:
             check_held(model.blocks)  # a singular stiffness: say which blocks nothing holds
             raise
+        _warn_unused_lines(system, cfg, own_lines, source, nodes)
     except ModelFileError:
         raise
     except InputError as exc:
         raise _from_engine(exc, cfg, ids, names, source, nodes) from None
     _check_stabilisation(model, cfg, source, nodes)
     return model
+
+
+def _warn_unused_lines(system, cfg: ModelFile, own_lines: int, source: str, nodes: Any) -> None:
+    """Log one warning naming the file's own joint lines that lie along no
+    contact: their joints are used nowhere, and a contact one was meant for
+    keeps the default joint (found by fuzzing: a weak joint drawn 1 mm off
+    the base of a block left it on the strong default, STABLE instead of
+    UNSTABLE, silently).  A warning, not an error: an imported section's
+    traces also run through the fixed ground or end inside a block, and a
+    DXF round trip keeps them."""
+    if not own_lines or system.model.joint_lines is None:
+        return
+    lines = system.model.joint_lines[:own_lines]
+    unused = lines_along_no_contact(system.interfaces, system.blocks, lines)
+    if not len(unused):
+        return
+    first = int(unused[0])
+    line = _line(nodes, ("joint_lines", first))
+    where = f"{source}:{line}" if line else source
+    if len(unused) == 1:
+        what = f"joint_lines[{first}] (joint {cfg.joint_lines[first].joint}) lies"
+        fix = "it gives its joint to none; check its points if it was meant for one"
+    else:
+        listed = ", ".join(f"[{i}]" for i in unused[:5]) + (", ..." if len(unused) > 5 else "")
+        what = f"{len(unused)} of the {own_lines} joint lines (joint_lines{listed}) lie"
+        fix = (
+            "they give their joints to none (a trace through the fixed ground or inside a "
+            "block); check their points if they were meant for one"
+        )
+    log.warning("%s: %s along no contact between blocks: %s", where, what, fix)
 
 
 def _check_count(cfg: ModelFile, source: str, nodes: Any, max_blocks: int | None) -> None:
