@@ -844,6 +844,22 @@ def test_an_imported_section_names_its_traces_along_no_contact_in_one_line(tmp_p
     assert len(warned) == 1 and "18 of the 44 joint lines" in warned[0], r.stderr
 
 
+def test_a_correlation_of_three_inputs_is_not_asked_for_as_a_point(tmp_path):
+    """Found by fuzzing: three inputs in one correlation were answered with
+    "expected a point [x, y]" (any pair in the format was taken for a point)."""
+    study = (
+        "study:\n  samples: 2\n  inputs:\n"
+        "    joints.cross.friction_angle: {distribution: normal, mean: 35, sd: 2}\n"
+        "    joints.bedding.friction_angle: {distribution: normal, mean: 35, sd: 2}\n"
+        "  correlations:\n    - {inputs: [joints.cross.friction_angle, "
+        "joints.bedding.friction_angle, joints.base.friction_angle], coefficient: 0.5}\n"
+    )
+    (tmp_path / "m.yaml").write_text(SLOPE + study, encoding="utf-8")
+    r = inproc("study", "m.yaml", "--out", "o", "--workers", "0", cwd=tmp_path)
+    line = assert_refused(r, "study.correlations[0].inputs", "has 3 items", "at most 2")
+    assert "point" not in line
+
+
 def test_a_slope_beyond_the_machines_memory_is_refused_whatever_the_limit(monkeypatch):
     """Found by fuzzing: with the block limit raised to 1e12, a 1 mm spacing
     (284 million blocks, about 7 TB) ran until the memory ran out.  Here the

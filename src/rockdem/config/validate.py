@@ -203,8 +203,11 @@ def _is_internal(part: Any) -> bool:
 
 
 def _is_point(loc: Loc) -> bool:
+    """The format has a pair of numbers at ``loc`` (a pair of names is no point:
+    a correlation's three inputs were asked for as ``[x, y]``)."""
     tp = _type_at(loc)
-    return typing.get_origin(tp) is tuple
+    args = typing.get_args(tp)
+    return typing.get_origin(tp) is tuple and str not in args
 
 
 def _short(value: Any) -> str:
