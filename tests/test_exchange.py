@@ -677,3 +677,21 @@ def test_a_grid_of_traces_beyond_the_block_limit_is_refused_before_the_cut(tmp_p
         cut_section(section, max_blocks=10_000)
     assert time.monotonic() - start < 5.0
     assert len(cut_section(section, max_blocks=20_000).polygons) > 14_160
+
+
+def test_a_section_too_wide_for_its_blocks_is_refused_at_the_drawing(tmp_path):
+    """Found by fuzzing: a section 1e9 m wide with 10 m high blocks cut blocks
+    (7 m) thinner than the drawing's tolerance (1e-8 of its size), which reached
+    the user as a raw "1 validation error for BlockSpec"."""
+    from rockdem.exchange.dxf_entities import DxfError
+
+    wide = 1e9
+    path = draw(
+        tmp_path,
+        outline=[(0, 0), (wide, 0), (wide, 10), (0, 10)],
+        fixed=[[(0, 0), (wide, 0), (wide, 3), (0, 3)]],
+        traces={"bedding": [], "cross": []},
+        water=None,
+    )
+    with pytest.raises(DxfError, match=r"collapses: it is thinner than the drawing's tolerance"):
+        cut_section(read_section(path))

@@ -88,6 +88,16 @@ def cut_section(section: Section, *, max_blocks: int | None = None) -> SectionBl
     key = np.round(cen / (1e-6 * extent))  # ties within round-off sort the same anywhere
     free = free[np.lexsort((key[:, 1], key[:, 0]))]
     fxy, foff = topo.to_arrays(free, tol)
+    corners = np.diff(foff)
+    if (corners < 3).any():  # found by fuzzing: a 1e9 m wide section, blocks 10 m high
+        k = int(np.argmax(corners < 3))
+        x, y = shapely.get_coordinates(shapely.centroid(free[k]))[0] + origin
+        raise _fail(
+            source,
+            f"the block at ({x:.6g}, {y:.6g}) collapses: it is thinner than the drawing's "
+            f"tolerance ({tol:.3g}, {GEOMETRY_RTOL:g} of the section's size {extent:.3g})",
+            "clip the outline closer to the slope, so that every block is wider than that",
+        )
     polygons = [fxy[foff[i] : foff[i + 1]] + origin for i in range(len(free))]
     ground = shapely.get_parts(shapely.coverage_union_all(faces[in_ground]))
     for g in ground:
