@@ -213,6 +213,28 @@ def test_cli_a_support_that_acts_on_no_block_names_the_file(app, tmp_path):
     assert "does not act on any block" in line
 
 
+OVERHANG = """units: kN, m, kPa
+materials: {r: {unit_weight: 25}}
+joints:
+  j: {normal_stiffness: 1.0e+6, friction_angle: 30}
+blocks:
+  - {fixed: true, vertices: [[-5, -1], [9, -1], [9, 0], [-5, 0]]}
+  - {material: r, vertices: [[0, 0], [1, 0], [1, 1], [5, 1], [5, 2], [0, 2]]}
+"""
+
+
+def test_cli_an_automatic_support_that_acts_on_no_block_says_it_was_automatic(app, tmp_path):
+    """Found by fuzzing: on an overhanging block (no `stabilisation` section)
+    the support rockdem places itself pulled out of the rock, and the error
+    blamed `stabilisation.support`'s angle, a key the user never wrote."""
+    (tmp_path / "m.yaml").write_text(OVERHANG)
+    r = CliRunner().invoke(app, ["stabilise", str(tmp_path / "m.yaml"), "--quiet"])
+    assert r.exit_code == 2, r.output
+    line = " ".join(r.output.split())
+    assert "(at the point rockdem placed on the mechanism's free surface)" in line
+    assert "--no-support" in line
+
+
 @pytest.mark.parametrize("target", ["0", "-1", "nan", "1e9"])
 def test_cli_bad_target_is_an_input_error(app, target):
     r = CliRunner().invoke(

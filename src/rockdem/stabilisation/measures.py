@@ -98,7 +98,8 @@ def support_force(
     b = model.blocks
     total = float(b.weight[~b.fixed].sum())
     largest = 2.0 * total if largest is None else float(largest)
-    if at is None:
+    automatic = at is None
+    if automatic:
         mech = mechanism_ids(rate(model, width=width))
         if not mech:
             raise InputError("support", "no mechanism to support", "the slope has no failure")
@@ -109,11 +110,13 @@ def support_force(
     try:  # the anchor must push into a free block where it acts
         block_loads(model.blocks, with_support(model, at, angle, 1.0).loads)
     except InputError as exc:
-        raise InputError(
+        placed = " (at the point rockdem placed on the mechanism's free surface)"
+        raise InputError(  # found by fuzzing: that point's origin was not said
             "stabilisation.support",
-            f"the force at angle {angle:g} {exc.problem}",
+            f"the force at angle {angle:g}{placed if automatic else ''} {exc.problem}",
             "give an angle that pushes into the slope (about 195 for a face looking toward "
-            "+x: 15 degrees below horizontal), or the support's `at`",
+            "+x: 15 degrees below horizontal), or the support's `at`"
+            + (", or leave the support out (`--no-support`)" if automatic else ""),
         ) from None
     count = 0
 
