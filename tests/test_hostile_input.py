@@ -860,6 +860,27 @@ def test_a_correlation_of_three_inputs_is_not_asked_for_as_a_point(tmp_path):
     assert "point" not in line
 
 
+@pytest.mark.parametrize(
+    ("loads", "fragments"),
+    [
+        (
+            "loads: {water_unit_weight: 9.81, water_table: [[100, 5], [-100, 5]]}",
+            ("m.yaml:14: loads.water_table: needs two or more finite points with x increasing",),
+        ),
+        (
+            "loads: {water_table: [[-100, 5], [100, 5]]}",
+            ("loads.water_unit_weight: is missing: a water table needs it",),
+        ),
+    ],
+)
+def test_a_water_table_error_names_the_loads_key(tmp_path, loads, fragments):
+    """Found by fuzzing: a reversed water table, or one without the unit
+    weight of water, was blamed on `slope:`; the missing unit weight read
+    "0.0 is not a positive unit weight", a value the user never wrote."""
+    r = check(tmp_path, SLOPE + loads + "\n")
+    assert_refused(r, *fragments)
+
+
 def test_a_slope_beyond_the_machines_memory_is_refused_whatever_the_limit(monkeypatch):
     """Found by fuzzing: with the block limit raised to 1e12, a 1 mm spacing
     (284 million blocks, about 7 TB) ran until the memory ran out.  Here the
