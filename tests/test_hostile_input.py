@@ -881,6 +881,19 @@ def test_a_water_table_error_names_the_loads_key(tmp_path, loads, fragments):
     assert_refused(r, *fragments)
 
 
+def test_a_study_on_thousands_of_local_workers_is_refused(tmp_path):
+    """Found by reading the code while fuzzing: --workers was capped only by
+    the number of samples, so --workers 5000 would start 5000 processes."""
+    study = (
+        "study:\n  samples: 9000\n  inputs:\n"
+        "    joints.cross.friction_angle: {distribution: normal, mean: 35, sd: 2}\n"
+    )
+    (tmp_path / "m.yaml").write_text(SLOPE + study, encoding="utf-8")
+    r = inproc("study", "m.yaml", "--out", "o", "--workers", "5000", cwd=tmp_path)
+    assert_refused(r, "--workers 5000", "processes per CPU core")
+    assert not (tmp_path / "o").exists()
+
+
 def test_a_slope_beyond_the_machines_memory_is_refused_whatever_the_limit(monkeypatch):
     """Found by fuzzing: with the block limit raised to 1e12, a 1 mm spacing
     (284 million blocks, about 7 TB) ran until the memory ran out.  Here the

@@ -47,7 +47,7 @@ def num(x, fmt: str = ".4g") -> str:
         return "∞" if v > 0 else "-∞"
     if np.isnan(v):
         return "-"
-    return format(v, fmt)
+    return format(v + 0.0, fmt)  # (+ 0.0: no "-0")
 
 
 def html_table(

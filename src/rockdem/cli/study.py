@@ -6,6 +6,7 @@ load when the command runs (``rockdem --version`` stays fast).
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 from typing import Annotated
 
@@ -26,6 +27,9 @@ from .common import (
     err,
     out,
 )
+
+#: the local cluster runs at most this many processes per CPU core
+MAX_WORKERS_PER_CORE = 4
 
 
 def study(
@@ -105,6 +109,13 @@ def study(
         if scheduler is not None and workers is not None:
             raise InputError(
                 "--workers", "is for the local cluster", "give --workers or --scheduler, not both"
+            )
+        cores = os.cpu_count() or 1
+        if workers is not None and workers > MAX_WORKERS_PER_CORE * cores:
+            raise InputError(  # found by fuzzing: --workers 5000 would start 5000 processes
+                f"--workers {workers}",
+                f"is more than {MAX_WORKERS_PER_CORE} processes per CPU core ({cores} here)",
+                f"give at most {MAX_WORKERS_PER_CORE * cores}, or --scheduler for a cluster",
             )
         path = _model_path(model, example)
         from .files import _check_out_folder
@@ -220,4 +231,4 @@ def _how(s: dict) -> str:
 
 
 def _g(x) -> str:
-    return "-" if x is None else f"{x:.3g}"
+    return "-" if x is None else f"{x + 0.0:.3g}"  # (+ 0.0: no "-0")
