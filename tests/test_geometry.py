@@ -267,7 +267,7 @@ def test_excavation_outside_the_model():
     assert "does not overlap" in e.value.problem
     with pytest.raises(InputError) as e:
         cut_to_profile(g, [(-100, 50), (100, 50)])
-    assert e.value.where == "cut_to_profile profile"
+    assert e.value.where == "the new profile"
 
 
 def test_add_explicit_block_after_excavation():

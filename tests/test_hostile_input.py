@@ -894,6 +894,13 @@ def test_a_study_on_thousands_of_local_workers_is_refused(tmp_path):
     assert not (tmp_path / "o").exists()
 
 
+def test_a_berm_off_the_model_names_no_function_of_the_library(tmp_path):
+    """Found by fuzzing: "stabilisation.berm: cut_to_profile profile: does not overlap"."""
+    berm = "stabilisation: {berm: [[-100, 100], [100, 100]]}\n"
+    line = assert_refused(check(tmp_path, SLOPE + berm), "stabilisation.berm", "does not overlap")
+    assert "cut_to_profile" not in line
+
+
 def test_a_slope_beyond_the_machines_memory_is_refused_whatever_the_limit(monkeypatch):
     """Found by fuzzing: with the block limit raised to 1e12, a 1 mm spacing
     (284 million blocks, about 7 TB) ran until the memory ran out.  Here the

@@ -170,7 +170,7 @@ def cut_to_profile(geom: SlopeGeometry, profile: Profile | Sequence) -> SlopeGeo
         pts = np.vstack([pts, [right, pts[-1, 1]]])
     top = max(y1, float(pts[:, 1].max())) + span
     region = shapely.Polygon(np.vstack([pts, [[pts[-1, 0], top], [pts[0, 0], top]]]))
-    return excavate(geom, region, where="cut_to_profile profile")
+    return excavate(geom, region, where="the new profile")
 
 
 def add_blocks(
