@@ -901,6 +901,24 @@ def test_a_berm_off_the_model_names_no_function_of_the_library(tmp_path):
     assert "cut_to_profile" not in line
 
 
+def test_a_loose_equilibrium_tolerance_is_warned_about(tmp_path):
+    """Found by fuzzing: `tolerance: 0.00999` (allowed) gave the paper's wedge
+    FS 0.9991 instead of 0.9786 (Eq. 7), silently: out-of-balance forces of
+    1% of the loads counted as equilibrium.  Now a warning says so."""
+    from rockdem.examples import example_path
+
+    text = example_path("wedge-verification").read_text(encoding="utf-8")
+    loose = text.replace("analysis:\n", "analysis:\n  tolerance: 0.00999\n", 1)
+    for name, model in (("default.yaml", text), ("loose.yaml", loose)):
+        (tmp_path / name).write_text(model, encoding="utf-8")
+    quiet = inproc("check", "default.yaml", cwd=tmp_path)
+    assert quiet.returncode == 0 and "warning" not in quiet.stderr
+    r = inproc("check", "loose.yaml", cwd=tmp_path)
+    assert r.returncode == 0
+    warned = [ln for ln in r.stderr.splitlines() if ln.startswith("warning: ")]
+    assert len(warned) == 1 and "loose.yaml:55: analysis.tolerance 0.00999" in warned[0]
+
+
 def test_a_slope_beyond_the_machines_memory_is_refused_whatever_the_limit(monkeypatch):
     """Found by fuzzing: with the block limit raised to 1e12, a 1 mm spacing
     (284 million blocks, about 7 TB) ran until the memory ran out.  Here the
