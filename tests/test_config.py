@@ -224,6 +224,13 @@ def test_yaml_1e6_string_is_read_as_a_number():
     assert model.joints[0].normal_stiffness == 1e6
 
 
+def test_a_name_that_looks_like_a_date_is_text():
+    """YAML 1.2 core has no timestamps (found by fuzzing: `name: 2001-12-14`
+    was refused as a date, against the format's YAML 1.2 promise)."""
+    model, _ = parse_model("name: 2001-12-14\n" + BOX)
+    assert model.name == "2001-12-14"
+
+
 def test_error_names_file_line_key_and_fix():
     text = BOX.replace("friction_angle: 30", "friction_angle: 95")
     with pytest.raises(ModelFileError) as info:

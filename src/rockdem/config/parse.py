@@ -123,7 +123,9 @@ def _too_large(source: str, limit: int) -> ModelFileError:
 
 # ------------------------------------------------------------------ YAML
 _LoaderBase: Any = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
-_INT, _FLOAT, _BOOL = (f"tag:yaml.org,2002:{t}" for t in ("int", "float", "bool"))
+_INT, _FLOAT, _BOOL, _TIME = (
+    f"tag:yaml.org,2002:{t}" for t in ("int", "float", "bool", "timestamp")
+)
 _DEC_INT = re.compile(r"^[-+]?[0-9]+$")
 _OCT_INT = re.compile(r"^0o[0-7]+$")
 _HEX_INT = re.compile(r"^0x[0-9a-fA-F]+$")
@@ -134,10 +136,11 @@ _FLOAT_RE = re.compile(
 
 
 class _Loader(_LoaderBase):
-    """Safe YAML with the YAML 1.2 core schema's numbers and booleans (as JSON has them)."""
+    """Safe YAML with the YAML 1.2 core schema's numbers and booleans (as JSON has
+    them), and no timestamps (YAML 1.1's: `name: 2001-12-14` was refused as a date)."""
 
     yaml_implicit_resolvers: ClassVar[dict] = {
-        first: [(tag, rx) for tag, rx in rules if tag not in (_INT, _FLOAT, _BOOL)]
+        first: [(tag, rx) for tag, rx in rules if tag not in (_INT, _FLOAT, _BOOL, _TIME)]
         for first, rules in _LoaderBase.yaml_implicit_resolvers.items()
     }
 
