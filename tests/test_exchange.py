@@ -695,3 +695,12 @@ def test_a_section_too_wide_for_its_blocks_is_refused_at_the_drawing(tmp_path):
     )
     with pytest.raises(DxfError, match=r"collapses: it is thinner than the drawing's tolerance"):
         cut_section(read_section(path))
+
+
+def test_an_empty_drawing_name_is_called_empty(tmp_path):
+    """Found by fuzzing: `geometry: {dxf: ''}` read "is a folder" (the model's own)."""
+    from rockdem.config import ModelFileError
+
+    text = MODEL.replace("geometry: {dxf: section.dxf}", "geometry: {dxf: ''}")
+    with pytest.raises(ModelFileError, match=r"geometry\.dxf: is empty"):
+        parse_model(text, source=str(tmp_path / "m.yaml"))

@@ -99,6 +99,8 @@ def with_dxf_blocks(cfg: Any, source: str, nodes: Any, max_blocks: int | None) -
         loc = ("geometry", *key.split(".")) if key else ("geometry", "dxf")
         return ModelFileError(source, _keypath(loc), problem, fix, _line(nodes, loc))
 
+    if not str(g.dxf).strip():  # found by fuzzing: '' was "is a folder" (the model's own)
+        raise fail("dxf", "is empty", "give the drawing's file name, for example section.dxf")
     path = dxf_path(cfg, source)
     layers = g.layers.model_dump(exclude_none=True)
     try:
