@@ -268,6 +268,16 @@ def test_a_bad_value_in_the_template_is_named_in_the_template(tmp_path, bad, fra
     assert not out.exists()
 
 
+def test_an_error_from_the_drawing_is_named_at_the_drawing(tmp_path):
+    """Found by fuzzing: a water table drawn above the crest was reported at
+    "<import>:13" (a line of the model not written) instead of the drawing."""
+    dxf = draw(tmp_path, water=[(0, 12), (24, 12)])
+    out = tmp_path / "m.yaml"
+    line = refused(invoke("import", dxf, "-o", out), "loads.water_table")
+    assert line.startswith(f"error: {dxf}: loads.water_table: ")
+    assert "<import>" not in line and not out.exists()
+
+
 def test_layer_names_are_overridden_by_a_mapping(tmp_path):
     dxf = draw(tmp_path)
     doc = ezdxf.readfile(dxf)

@@ -46,17 +46,20 @@ def _pairs(values: list[str] | None, option: str) -> dict[str, str]:
     return out
 
 
-def _in_template(exc, template: Path | None):
+def _in_template(exc, template: Path | None, drawing: Path):
     """An error of the imported model at a key the template gave, named in the
-    template at that key's line (the model written, or not written, is not
-    where the user can fix it)."""
+    template at that key's line; any other, named at the drawing (the model
+    written, or not written, is not where the user can fix it: found by
+    fuzzing, "<import>:13: loads water_table ..." for the drawing's WATER
+    layer)."""
     import re
 
     from ..config import read_document
     from ..config.errors import ModelFileError, _line
 
+    at_drawing = ModelFileError(str(drawing), exc.key, exc.problem, exc.fix, None)
     if template is None or not exc.key:
-        return exc
+        return at_drawing
     loc = tuple(
         int(part) if part.isdigit() else part for part in re.findall(r"[^.\[\]]+", exc.key)
     )
@@ -68,7 +71,7 @@ def _in_template(exc, template: Path | None):
         elif isinstance(node, list) and isinstance(part, int) and part < len(node):
             node = node[part]
         else:
-            return exc
+            return at_drawing
     return ModelFileError(str(template), exc.key, exc.problem, exc.fix, _line(nodes, loc))
 
 
@@ -194,7 +197,7 @@ def import_dxf(
         try:
             parse_model(text, source=source, max_blocks=None)  # what is written loads
         except ModelFileError as exc:
-            raise _in_template(exc, template) from None
+            raise _in_template(exc, template, path) from None
         if out_file is None:
             typer.echo(text, nl=False)
         else:
