@@ -919,6 +919,22 @@ def test_a_loose_equilibrium_tolerance_is_warned_about(tmp_path):
     assert len(warned) == 1 and "loose.yaml:55: analysis.tolerance 0.00999" in warned[0]
 
 
+@pytest.mark.parametrize(
+    ("y", "how"), [("-1e-6", "overlaps block 0 by a sliver"), ("1e-6", "misses block 0 by 1e-06")]
+)
+def test_a_block_off_its_neighbour_by_a_hair_is_told_so(tmp_path, y, how):
+    """Found by fuzzing: a block sunk 1e-6 into the ground was said to "touch
+    no other block (it would float)"."""
+    text = (
+        "units: kN, m, kPa\nmaterials: {r: {unit_weight: 25}}\n"
+        "joints:\n  j: {normal_stiffness: 1.0e+6, friction_angle: 30}\nblocks:\n"
+        "  - {fixed: true, vertices: [[-5, -1], [9, -1], [9, 0], [-5, 0]]}\n"
+        f"  - {{material: r, vertices: [[0, {y}], [4, {y}], [4, 2], [0, 2]]}}\n"
+    )
+    line = assert_refused(check(tmp_path, text), "blocks[1]", how, "geometric tolerance")
+    assert "float" not in line
+
+
 def test_a_slope_beyond_the_machines_memory_is_refused_whatever_the_limit(monkeypatch):
     """Found by fuzzing: with the block limit raised to 1e12, a 1 mm spacing
     (284 million blocks, about 7 TB) ran until the memory ran out.  Here the

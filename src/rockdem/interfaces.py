@@ -175,8 +175,27 @@ def _check_connected(blocks: Blocks, faces: Interfaces) -> None:
     touched[faces.block_b] = True
     lonely = np.flatnonzero(~touched & ~blocks.fixed)
     if lonely.size:
+        k = int(lonely[0])
+        polys = blocks.polygons()
+        others = np.delete(np.arange(blocks.n_blocks), k)
+        near = shapely.distance(polys[k], polys[others]) if others.size else np.zeros(0)
+        if near.size and near.min() <= 1e-3 * blocks.extent:
+            # found by fuzzing: a block sunk 1e-6 into the ground "would float"
+            j = int(others[np.argmin(near)])
+            gap = float(near.min())
+            how = (
+                f"overlaps block {int(blocks.ids[j])} by a sliver deeper than"
+                if gap == 0
+                else f"misses block {int(blocks.ids[j])} by {gap:.3g}, more than"
+            )
+            raise InputError(
+                f"block {int(blocks.ids[k])}",
+                f"shares no edge with another block: it {how} the model's geometric "
+                f"tolerance ({blocks.tolerance:.3g})",
+                "make the edges it rests on match its neighbour's within the tolerance",
+            )
         raise InputError(
-            f"block {int(blocks.ids[lonely[0]])}",
+            f"block {int(blocks.ids[k])}",
             "touches no other block along an edge (it would float)",
             "move it onto its neighbours, make it fixed, or remove it",
         )
