@@ -199,16 +199,21 @@ def test_cli_results_appear_all_or_nothing(app, tmp_path, monkeypatch):
     assert [p.name for p in tmp_path.iterdir()] == ["res"]  # no temporary folder left
 
 
+def _stabilise_refused(app, tmp_path, text: str) -> str:
+    """`rockdem stabilise` of ``text`` (as m.yaml): exit 2; its output on one line."""
+    (tmp_path / "m.yaml").write_text(text)
+    r = CliRunner().invoke(app, ["stabilise", str(tmp_path / "m.yaml"), "--quiet"])
+    assert r.exit_code == 2, r.output
+    return " ".join(r.output.split())
+
+
 def test_cli_a_support_that_acts_on_no_block_names_the_file(app, tmp_path):
     """Found by fuzzing: a support angle pulling out of the rock is known to
     be wrong only once the mechanism fixes where the force acts; the error
     names the model file with the key, on one line, exit 2."""
     text = example_path("inclined-layers").read_text()
     text = text.replace("stabilisation:\n", "stabilisation:\n  support: {angle: 90}\n", 1)
-    (tmp_path / "m.yaml").write_text(text)
-    r = CliRunner().invoke(app, ["stabilise", str(tmp_path / "m.yaml"), "--quiet"])
-    assert r.exit_code == 2, r.output
-    line = " ".join(r.output.split())
+    line = _stabilise_refused(app, tmp_path, text)
     assert "m.yaml: stabilisation.support: the force at angle 90" in line
     assert "does not act on any block" in line
 
@@ -227,10 +232,7 @@ def test_cli_an_automatic_support_that_acts_on_no_block_says_it_was_automatic(ap
     """Found by fuzzing: on an overhanging block (no `stabilisation` section)
     the support rockdem places itself pulled out of the rock, and the error
     blamed `stabilisation.support`'s angle, a key the user never wrote."""
-    (tmp_path / "m.yaml").write_text(OVERHANG)
-    r = CliRunner().invoke(app, ["stabilise", str(tmp_path / "m.yaml"), "--quiet"])
-    assert r.exit_code == 2, r.output
-    line = " ".join(r.output.split())
+    line = _stabilise_refused(app, tmp_path, OVERHANG)
     assert "(at the point rockdem placed on the mechanism's free surface)" in line
     assert "--no-support" in line
 

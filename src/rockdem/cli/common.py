@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import json
 import logging
-import sys
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
@@ -150,7 +149,7 @@ class _WarningLine(logging.Handler):
 
     def emit(self, record: logging.LogRecord) -> None:
         text = " ".join(record.getMessage().split())  # one line, whatever the message
-        print(f"warning: {text}", file=sys.stderr)
+        err.print(f"warning: {escape(text)}")
 
 
 def _show_warnings() -> None:
