@@ -26,3 +26,13 @@ slope:
     bedding: {dip: 0, spacing: 2, origin: [0, 1]}
     cross: {dip: 90, spacing: 3, origin: [0.5, 0]}
 """
+
+#: a free block overhanging its base (a support placed on it pulls out of the rock)
+OVERHANG = """units: kN, m, kPa
+materials: {r: {unit_weight: 25}}
+joints:
+  j: {normal_stiffness: 1.0e+6, friction_angle: 30}
+blocks:
+  - {fixed: true, vertices: [[-5, -1], [9, -1], [9, 0], [-5, 0]]}
+  - {material: r, vertices: [[0, 0], [1, 0], [1, 1], [5, 1], [5, 2], [0, 2]]}
+"""

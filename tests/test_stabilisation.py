@@ -11,6 +11,7 @@ import typer
 from typer.testing import CliRunner
 
 import rockdem as rd
+from _models import OVERHANG
 from rockdem.cli_stabilise import stabilise as stabilise_command
 from rockdem.config import load_model
 from rockdem.examples import example_path
@@ -216,16 +217,6 @@ def test_cli_a_support_that_acts_on_no_block_names_the_file(app, tmp_path):
     line = _stabilise_refused(app, tmp_path, text)
     assert "m.yaml: stabilisation.support: the force at angle 90" in line
     assert "does not act on any block" in line
-
-
-OVERHANG = """units: kN, m, kPa
-materials: {r: {unit_weight: 25}}
-joints:
-  j: {normal_stiffness: 1.0e+6, friction_angle: 30}
-blocks:
-  - {fixed: true, vertices: [[-5, -1], [9, -1], [9, 0], [-5, 0]]}
-  - {material: r, vertices: [[0, 0], [1, 0], [1, 1], [5, 1], [5, 2], [0, 2]]}
-"""
 
 
 def test_cli_an_automatic_support_that_acts_on_no_block_says_it_was_automatic(app, tmp_path):

@@ -47,6 +47,7 @@ class ModelFile(_Section):
         if isinstance(v, bool):  # `true` equals 1 in Python, not in a file (fuzzing)
             raise PydanticCustomError("format_bool", f"{str(v).lower()} is not a format version")
         return v
+
     name: str | None = None
     """Name of the model (default: the file name without suffix)."""
     description: str = ""

@@ -1,0 +1,123 @@
+"""What the engine says about a model file, in the file's terms: its errors
+mapped back to the key path at fault, and the warnings of a model that
+builds but may not be what was meant."""
+
+from __future__ import annotations
+
+import logging
+import re
+from typing import Any
+
+from ..errors import InputError
+from ..interfaces import lines_along_no_contact
+from .errors import Loc, ModelFileError, _keypath, _line
+from .spec import ModelFile
+
+log = logging.getLogger(__name__)
+
+
+#: an equilibrium tolerance above this is warned about (the default is 1e-8)
+LOOSE_TOLERANCE = 1e-5
+
+
+def _warn_loose_tolerance(tolerance: float, source: str, nodes: Any) -> None:
+    """Log a warning for a tolerance loose enough to move the results (found
+    by fuzzing: 0.00999, allowed, gave the paper's wedge 0.9991 for 0.9786)."""
+    if tolerance <= LOOSE_TOLERANCE:
+        return
+    line = _line(nodes, ("analysis", "tolerance"))
+    where = f"{source}:{line}" if line else source
+    log.warning(
+        "%s: analysis.tolerance %g counts out-of-balance forces up to that share of the "
+        "loads as equilibrium, so a stable result or the low end of a factor of safety's "
+        "bracket may be no equilibrium (the paper's wedge: 0.9805 at 1e-3 and 0.9991 at "
+        "0.00999, against 0.9786); keep the default 1e-8 unless you know why",
+        where,
+        tolerance,
+    )
+
+
+def _warn_unused_lines(system, cfg: ModelFile, own_lines: int, source: str, nodes: Any) -> None:
+    """Log one warning naming the file's own joint lines that lie along no
+    contact: their joints are used nowhere, and a contact one was meant for
+    keeps the default joint (found by fuzzing: a weak joint drawn 1 mm off
+    the base of a block left it on the strong default, STABLE instead of
+    UNSTABLE, silently).  A warning, not an error: an imported section's
+    traces also run through the fixed ground or end inside a block, and a
+    DXF round trip keeps them."""
+    if not own_lines or system.model.joint_lines is None:
+        return
+    lines = system.model.joint_lines[:own_lines]
+    unused = lines_along_no_contact(system.interfaces, system.blocks, lines)
+    if not len(unused):
+        return
+    first = int(unused[0])
+    line = _line(nodes, ("joint_lines", first))
+    where = f"{source}:{line}" if line else source
+    if len(unused) == 1:
+        what = f"joint_lines[{first}] (joint {cfg.joint_lines[first].joint}) lies"
+        fix = "it gives its joint to none; check its points if it was meant for one"
+    else:
+        listed = ", ".join(f"[{i}]" for i in unused[:5]) + (", ..." if len(unused) > 5 else "")
+        what = f"{len(unused)} of the {own_lines} joint lines (joint_lines{listed}) lie"
+        fix = (
+            "they give their joints to none (a trace through the fixed ground or inside a "
+            "block); check their points if they were meant for one"
+        )
+    log.warning("%s: %s along no contact between blocks: %s", where, what, fix)
+
+
+_BLOCK = re.compile(r"^blocks? (-?\d+)")
+
+
+def _from_engine(
+    exc: InputError,
+    cfg: ModelFile,
+    ids: dict[int, int],
+    names: dict[str, Loc],
+    source: str,
+    nodes: Any,
+) -> ModelFileError:
+    """Map an engine InputError back to the key path of the file."""
+    where = exc.where
+    loc: Loc = ()
+    m = _BLOCK.match(where)
+    j = re.match(r"joint '(.+)' (\w+)$", where)
+    js = re.match(r"joint set '(.+?)'(?: (\w+))?$", where)
+    jl = re.match(r"joint_lines (\d+)$", where)
+    rr = re.match(r"remove\.regions (\d+)$", where)
+    gs = re.match(r"generate_slope (\w+)$", where)  # an argument: the slope's key
+    pr = re.match(r"Profile\.simple (\w+)$", where)  # a key of slope.profile
+    bk = re.match(r"(bolts .+) (\w+)$", where)
+    if gs and cfg.slope is not None:
+        loc, label = ("slope", gs.group(1)), ""
+    elif pr and cfg.slope is not None:
+        loc, label = ("slope", "profile", pr.group(1)), ""
+    elif where == "remove.profile":
+        loc, label = ("remove", "profile"), ""
+    elif bk and bk.group(1) in names:  # a key of a bolt: "bolts NAME spacing"
+        loc, label = (*names[bk.group(1)], bk.group(2)), ""
+    elif j and j.group(1) in cfg.joints:
+        loc, label = ("joints", j.group(1), j.group(2)), ""
+    elif js and cfg.slope is not None and js.group(1) in cfg.slope.joint_sets:
+        loc = ("slope", "joint_sets", js.group(1)) + ((js.group(2),) if js.group(2) else ())
+        label = ""
+    elif jl:
+        loc, label = ("joint_lines", int(jl.group(1))), ""
+    elif rr:
+        loc, label = ("remove", "regions", int(rr.group(1))), ""
+    elif cfg.blocks is not None and where.startswith("blocks ") and "," in where:
+        loc, label = ("blocks",), where
+    elif cfg.blocks is not None and m and int(m.group(1)) in ids:
+        loc = ("blocks", ids[int(m.group(1))])
+        label = where
+    elif where in names:
+        loc, label = names[where], ""
+    elif where in ("loads water_table", "loads water_unit_weight"):  # found by fuzzing
+        loc, label = ("loads", where.split()[1]), ""  # (was blamed on `slope`)
+    elif cfg.slope is not None:
+        loc, label = ("slope",), ("" if where == "slope" else where)
+    else:
+        label = where
+    problem = f"{label} {exc.problem}".strip() if label else exc.problem
+    return ModelFileError(source, _keypath(loc), problem, exc.fix, _line(nodes, loc))
