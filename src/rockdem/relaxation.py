@@ -78,7 +78,14 @@ EXTENSIONS = 20
 EXTEND_WORK = 1e8
 #: operators with at most this many entries (dense) are multiplied as dense
 #: arrays: a sparse product costs ~8 us of dispatch alone, most of a step on
-#: a model of a few blocks, which may take tens of thousands of steps
+#: a model of a few blocks, which may take tens of thousands of steps.  The
+#: dense products go through einsum, not BLAS (2-4 us more per step): a
+#: threaded OpenBLAS product summed in an order that changed with its threads
+#: and with what the process had run before, and the explicit dynamics is
+#: chaotic (on a 2-core AVX-512 machine Goodman & Bray's staircase searched
+#: with grow 1.3 read 1.0147 instead of 1.0204 with other modes, and the
+#: ten-times-larger 75 degree columns 0.297 instead of 0.374 after the other
+#: toppling tests had run; with OPENBLAS_NUM_THREADS=1, or einsum, neither)
 DENSE_ENTRIES = 20_000
 
 
@@ -276,7 +283,7 @@ class _Unbalanced:
         if sp.issparse(self.B):
             self.d[:] = self.B @ q
         else:
-            np.matmul(self.B, q, out=self.d)
+            np.einsum("ij,j->i", self.B, q, out=self.d)
         # the law of spring_law.forces: -sigma = min(kn dn, T); the capacity
         # max(c + sigma tan phi, 0); tau = ks (ds - slip) clipped to it
         pn, ps, cap = self.pn, self.ps, self.cap
@@ -289,7 +296,10 @@ class _Unbalanced:
         ps *= self.ks
         np.negative(cap, out=self.low)
         np.clip(ps, self.low, cap, out=ps)
-        r = self.f - self.BtW @ self.p
+        if sp.issparse(self.BtW):
+            r = self.f - self.BtW @ self.p
+        else:
+            r = self.f - np.einsum("ij,j->i", self.BtW, self.p)
         if self.bolts is not None:
             r -= self.bolts.internal_force(q)
         return r
@@ -331,8 +341,11 @@ def confirm_failed_trial(system, failed, base, factor: float, trials):
     (small models; one segment from 25,000 dof): toppling columns ten
     times larger than Goodman & Bray's, stopped there, read 0.293 instead
     of 0.374, after a change in how the gravity state is released.
-    Returns ``(analysis, trials, run, factor of the run)``; a run that found
-    equilibrium there shows that the limit was a stall of Newton's method."""
+    Returns ``(analysis, trials, run, factor of the run, first run)``; a run
+    that found equilibrium there shows that the limit was a stall of
+    Newton's method.  The first run, at the first margin, is returned as
+    well: undecided there and a mechanism farther on does not confirm the
+    bracket (the caller may go on from it)."""
     asm = system.assembly
     free = ~system.blocks.fixed
     q0 = np.zeros(asm.n_dof)
@@ -340,6 +353,7 @@ def confirm_failed_trial(system, failed, base, factor: float, trials):
     state = base.state.without_slip()
     look = not failed.evidence.certified  # proven: the run only shows the mechanism
     steps = MAX_STEPS if look else SHOW_STEPS
+    first = None
     for margin in CONFIRM_MARGINS:
         beyond = factor * (1.0 + margin)
         run = relax(
@@ -352,6 +366,7 @@ def confirm_failed_trial(system, failed, base, factor: float, trials):
             extend=True,
             second_look=look,
         )
+        first = run if first is None else first
         if run.status != "undecided":  # a mechanism, or equilibrium: the limit was a stall
             break
     done = run.steps
@@ -375,7 +390,7 @@ def confirm_failed_trial(system, failed, base, factor: float, trials):
     trials = list(trials)
     last_failed = max(i for i, t in enumerate(trials) if not t.stable)
     trials[last_failed] = replace(trials[last_failed], evidence=failed.evidence)
-    return failed, trials, run, beyond
+    return failed, trials, run, beyond, first
 
 
 def _with_relaxation(failed, text: str):

@@ -19,7 +19,7 @@ from .analysis import _evidence, _package, _settle, analyse
 from .certificate import prove_failed_trial
 from .mechanism import relaxation_mechanism
 from .model import Model
-from .relaxation import confirm_failed_trial
+from .relaxation import CONFIRM_MARGINS, confirm_failed_trial
 from .results import Analysis, FactorOfSafety, Step, Trial
 from .solver import System, build_system
 
@@ -176,7 +176,20 @@ def factor_of_safety(
             wider, more = prove_failed_trial(system, hi_an, lo_an.state, top, trials)
             if wider.evidence.certified:
                 hi_an, trials, hi = wider, more, top
-        hi_an, trials, run, beyond = confirm_failed_trial(system, hi_an, lo_an, hi, trials)
+        hi_an, trials, run, beyond, first = confirm_failed_trial(system, hi_an, lo_an, hi, trials)
+        shown, moved_at = run, None
+        if (
+            run.status == "mechanism"
+            and first.status == "undecided"
+            and not hi_an.evidence.certified
+        ):
+            # nearly settled at the first margin, moving only at the next: that
+            # does not confirm the bracket; the search goes on from the nearer
+            # run, and if it cannot, the bracket reaches the mechanism (a
+            # 2,322-block family slope stalled at 1.431, settled to 2e-5 of the
+            # loads at 1.460 and moved at 1.503: FS 1.4866)
+            moved_at = beyond
+            run, beyond = first, hi * (1.0 + CONFIRM_MARGINS[0])
         found = run.status == "equilibrium"
         if (
             run.status != "mechanism"
@@ -198,7 +211,8 @@ def factor_of_safety(
             if b.stable:
                 lo_an, hi_an, hi_F = b, None, np.inf
                 continue
-        hi_an = relaxation_mechanism(system, hi_an, run)
+        hi_an = relaxation_mechanism(system, hi_an, shown)
+        hi = moved_at if moved_at is not None else hi
         break
     if hi_an is not None:  # how the contacts stood as failure began
         hi_an = replace(hi_an, limit_interfaces=lo_an.interfaces)
