@@ -365,6 +365,28 @@ def test_values_out_of_their_range_name_the_key_and_the_range(tmp_path, old, new
 
 
 @pytest.mark.parametrize(
+    "old, new, where",
+    [
+        (
+            "  bedding: {",
+            "  null: {normal_stiffness: 1, friction_angle: 30}\n  bedding: {",
+            ":4: joints:",
+        ),
+        ("materials: {rock:", "materials: {~: {unit_weight: 3}, rock:", ":2: materials:"),
+        ("blocks:", "analysis: {12: 3}\nblocks:", ":5: analysis:"),
+    ],
+)
+def test_a_key_that_is_no_name_is_named_as_written(tmp_path, old, new, where):
+    """Fuzzing: a YAML key `null:` (or `~`, or a number) was reported as
+    `joints.None: expected text, got null` or pydantic's "Keys should be
+    strings"; now the mapping, the key as the file spells it, and its line."""
+    assert old in BOX
+    line = assert_refused(check(tmp_path, BOX.replace(old, new, 1)), where, "a key must be a name")
+    assert "None" not in line
+    assert ("`12`" if "12" in new else "`null`") in line
+
+
+@pytest.mark.parametrize(
     "settings",
     ["{grow: 1.000000001}", "{width: 1.0e-6, grow: 1.01}", "{largest: 1.0e+6, grow: 1.05}"],
 )

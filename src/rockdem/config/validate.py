@@ -136,6 +136,11 @@ def _describe(err: dict) -> tuple[Loc, str, str]:
     value = err.get("input")
     ctx = err.get("ctx") or {}
     shown = repr(value) if isinstance(value, str) else _short(value)
+    if "[key]" in err["loc"] or kind == "invalid_key":  # a key that is no name (`null:`, `12:`)
+        key = loc[-1] if loc else None
+        key = "null" if key in (None, "None") else key  # pydantic names a null key 'None'
+        fix = "write a name (in quotes if it is a number)"
+        return loc[:-1], f"a key must be a name, got `{key}`", fix
     if kind == "extra_forbidden":
         parent = _type_at(loc[:-1])
         allowed = list(parent.model_fields) if isinstance(parent, type) else []
@@ -227,7 +232,10 @@ def _from_validation(exc: ValidationError, source: str, nodes: Any) -> ModelFile
     others = len({(d[0], d[1]) for d in map(_describe, errors)} - {(loc, problem)})
     if others:
         fix += f" ({others} more problem{'s' if others > 1 else ''} in the file)"
-    return ModelFileError(source, _keypath(loc) or "(top level)", problem, fix, _line(nodes, loc))
+    line = _line(nodes, loc)
+    if "[key]" in err["loc"] or err["type"] == "invalid_key":  # the bad key's own line
+        line = _line(nodes, tuple(p for p in err["loc"] if not _is_internal(p))) or line
+    return ModelFileError(source, _keypath(loc) or "(top level)", problem, fix, line)
 
 
 # ======================================================== cross-checks
