@@ -420,6 +420,27 @@ def test_a_fresh_folder_with_the_users_files_is_refused(tmp_path):
         assert (folder / mine).read_text() == "mine\n"
 
 
+@pytest.mark.parametrize("overwrite", [False, True])
+def test_a_worst_sample_edited_in_place_is_never_deleted(tmp_path, overwrite):
+    """Fuzzing: every run rewrites worst/, so a worst sample edited where it
+    was written was deleted by the next run (or by --overwrite).  The study
+    records what it wrote (summary.json) and refuses a folder whose worst/
+    file changed since, even with --overwrite; an unchanged folder runs on."""
+    model = write_model(tmp_path, normal_phi(samples=3, sampler="latin-hypercube", worst=1))
+    folder = tmp_path / "out"
+    r = invoke("study", model, "--out", folder, "--workers", 0, "--quiet")
+    assert r.exit_code == 0, r.stderr
+    (sample,) = (folder / "worst").glob("sample-*.yaml")
+    r = invoke("study", model, "--out", folder, "--workers", 0, "--quiet")  # unchanged: resumes
+    assert r.exit_code == 0, r.stderr
+    edited = sample.read_text() + "# my notes\n"
+    sample.write_text(edited)
+    flag = ["--overwrite"] if overwrite else []
+    r = invoke("study", model, "--out", folder, "--workers", 0, "--quiet", *flag)
+    refused(r, f"worst/{sample.name} was changed", "move the file out of worst/")
+    assert sample.read_text() == edited
+
+
 # ---------------------------------------------------------------- bad input
 BAD = [
     (

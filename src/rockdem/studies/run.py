@@ -361,10 +361,11 @@ def study(
     plan = model if isinstance(model, Plan) else prepare(model, spec, max_blocks=max_blocks)
     folder = Path(out) if out is not None else None
     if folder is not None:
-        from .store import check_inputs_outside
+        from .store import check_inputs_outside, check_worst_unedited
 
         spec_file = spec if isinstance(spec, str | os.PathLike) else None
         check_inputs_outside(folder, [plan.source, spec_file])
+        check_worst_unedited(folder)
     store = Store(plan.names, folder, plan.manifest(), overwrite)
     total = len(plan.values)
     resumed = len(store.done)
@@ -429,10 +430,10 @@ def _count(counts: dict, row: dict) -> None:
 
 # ================================================================ outputs
 def _write_outputs(folder: Path, plan: Plan, table, summary: dict) -> None:
-    from .store import _atomic_write
+    from .store import _atomic_write, worst_digest
 
     worst_dir = folder / "worst"
-    for old in worst_dir.glob("sample-*.yaml"):
+    for old in worst_dir.glob("sample-*.yaml"):  # (checked unedited at the start)
         old.unlink()
     written = []
     rows = table.set_index("sample")
@@ -442,6 +443,11 @@ def _write_outputs(folder: Path, plan: Plan, table, summary: dict) -> None:
         _write_sample_model(path, plan, i, rows.loc[i])
         written.append(str(path.relative_to(folder)))
     summary["worst_files"] = written
+    # what each held, so that the next run into this folder can tell an edit
+    summary["worst_digests"] = {
+        path.relative_to(folder).as_posix(): worst_digest(path)
+        for path in worst_dir.glob("sample-*.yaml")
+    }
     from .plots import write_pictures
 
     summary["pictures"] = write_pictures(folder, table, summary, plan.names)

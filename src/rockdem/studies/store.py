@@ -13,6 +13,7 @@ continues only the same study.
 from __future__ import annotations
 
 import csv
+import hashlib
 import json
 import math
 import os
@@ -65,6 +66,35 @@ def check_inputs_outside(folder: Path, inputs: list) -> None:
                 f"--out {folder}",
                 f"the study would write over its input {source}",
                 "copy the file out of the folder, or write the study into another folder",
+            )
+
+
+def worst_digest(path: Path) -> str:
+    """What a worst sample's file held when the study wrote it (summary.json)."""
+    return hashlib.sha256(path.read_bytes()).hexdigest()
+
+
+def check_worst_unedited(folder: Path) -> None:
+    """Refuse a study folder whose ``worst/`` holds a file the study did not
+    write as it is (a worst sample edited in place, say): every run rewrites
+    that folder, and the edit would be lost.  Even with ``--overwrite``.
+    (A folder whose summary.json records no digests, or none, is older or
+    unfinished: nothing to compare with.)"""
+    folder = Path(folder)
+    try:
+        digests = json.loads((folder / "summary.json").read_text(encoding="utf-8"))
+        digests = digests.get("worst_digests")
+    except (OSError, ValueError, AttributeError):
+        return
+    if not isinstance(digests, dict):
+        return
+    for path in sorted((folder / "worst").glob("sample-*.yaml")):
+        name = path.relative_to(folder).as_posix()
+        if digests.get(name) != worst_digest(path):
+            raise InputError(
+                f"--out {folder}",
+                f"{name} was changed after the study wrote it (every run rewrites worst/)",
+                "move the file out of worst/ to keep it, then run again",
             )
 
 
