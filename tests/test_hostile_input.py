@@ -365,6 +365,30 @@ def test_values_out_of_their_range_name_the_key_and_the_range(tmp_path, old, new
 
 
 @pytest.mark.parametrize(
+    "units, fragment",
+    [
+        ("kN, m, MPa", "kN / m^2 is kPa, not MPa"),
+        ("MN, mm, kPa", "MN / mm^2 is 1e+12 Pa, not kPa"),
+        ("kN, MN, m", "two force units (kN and MN)"),
+        ("kN, m, ft", "two length units (m and ft)"),
+    ],
+)
+def test_contradictory_units_are_refused(tmp_path, units, fragment):
+    """Fuzzing: "kN, m, MPa" was accepted and every stress computed from kN and
+    m (kPa) was labelled MPa.  The note labels every number: one system."""
+    r = check(tmp_path, BOX.replace("units: kN, m, kPa", f"units: {units}", 1))
+    assert_refused(r, ":1: units:", fragment, "one consistent system")
+
+
+@pytest.mark.parametrize(
+    "units", ["MN-m-MPa", "N, mm, MPa", "t, m, t/m^2", "units in kN and m", "kip, ft, ksf"]
+)
+def test_consistent_units_are_accepted(tmp_path, units):
+    r = check(tmp_path, BOX.replace("units: kN, m, kPa", f'units: "{units}"', 1))
+    assert r.returncode == 0 and "valid" in r.stdout, r.stderr
+
+
+@pytest.mark.parametrize(
     "old, new, where",
     [
         (

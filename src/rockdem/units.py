@@ -19,7 +19,7 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass
 
-__all__ = ["UNKNOWN", "Units", "parse_units"]
+__all__ = ["UNKNOWN", "Units", "contradiction", "parse_units"]
 
 FORCES = ("N", "kN", "MN", "GN", "t", "tf", "kgf", "lbf", "kip", "kips")
 LENGTHS = ("m", "mm", "cm", "km", "ft", "in")
@@ -111,3 +111,42 @@ def parse_units(note: str | None) -> Units:
     if force is None or length is None:
         return UNKNOWN
     return Units(force, length, stress or f"{force}/{length}^2")
+
+
+#: SI multiples, to check that a note's stress is its force / length^2
+_SI_FORCE = {"N": 1.0, "kN": 1e3, "MN": 1e6, "GN": 1e9}
+_SI_LENGTH = {"m": 1.0, "mm": 1e-3, "cm": 1e-2, "km": 1e3}
+_SI_STRESS = {"Pa": 1.0, "kPa": 1e3, "MPa": 1e6, "GPa": 1e9}
+
+
+def contradiction(note: str | None) -> str | None:
+    """What makes a ``units`` note inconsistent (None if nothing): two force or
+    two length units, or an SI stress unit that is not force / length^2
+    ("kN, m, MPa": the stresses computed from kN and m are kPa, and would be
+    labelled MPa).
+
+    >>> contradiction("kN, m, MPa")
+    'kN / m^2 is kPa, not MPa'
+    >>> contradiction("kN, m, kPa (angles in degrees)") is None
+    True
+    """
+    if not note:
+        return None
+    text = note.split("(", 1)[0]
+    tokens = [t for t in re.split(r"[,;\s]+|(?<=[A-Za-z0-9])-(?=[A-Za-z])", text) if t]
+    forces = list(dict.fromkeys(t for t in tokens if t in FORCES))
+    lengths = list(dict.fromkeys(t for t in tokens if t in LENGTHS))
+    if len(lengths) > 1 and lengths[0] == "in":  # "units in kN and m"
+        lengths = lengths[1:]
+    if len(forces) > 1:
+        return f"names two force units ({forces[0]} and {forces[1]})"
+    if len(lengths) > 1:
+        return f"names two length units ({lengths[0]} and {lengths[1]})"
+    u = parse_units(note)
+    if u.known and u.force in _SI_FORCE and u.length in _SI_LENGTH and u.stress in _SI_STRESS:
+        ratio = _SI_FORCE[u.force] / _SI_LENGTH[u.length] ** 2
+        if not 0.999 < ratio / _SI_STRESS[u.stress] < 1.001:
+            same = next((k for k, v in _SI_STRESS.items() if 0.999 < ratio / v < 1.001), None)
+            derived = same or f"{ratio:g} Pa"
+            return f"{u.force} / {u.length}^2 is {derived}, not {u.stress}"
+    return None

@@ -29,7 +29,19 @@ def validate_document(data: dict, *, source: str = "<string>", nodes: Any = None
     except ValidationError as exc:
         raise _from_validation(exc, source, nodes) from None
     _check_references(cfg, source, nodes)
+    _check_units(cfg, source, nodes)
     return cfg
+
+
+def _check_units(cfg: ModelFile, source: str, nodes: Any) -> None:
+    """The ``units`` note labels every number printed: it must be one
+    consistent system (rockdem computes in the units of the numbers given)."""
+    from ..units import contradiction
+
+    problem = contradiction(cfg.units)
+    if problem is not None:
+        fix = "state one consistent system, for example `kN, m, kPa` or `MN, m, MPa`"
+        raise ModelFileError(source, "units", problem, fix, _line(nodes, ("units",)))
 
 
 def _unwrap(tp: Any) -> Any:
