@@ -25,7 +25,6 @@ BROKEN = Path(__file__).parent / "broken_models"
 WEDGE_FOS = wedge_fos(200, 75, 37, 27, 35, 30, 35)
 
 
-
 def invoke(*args: str):
     return runner.invoke(app, [str(a) for a in args])
 
@@ -113,9 +112,19 @@ def test_run_writes_result_files(box, tmp_path):
     assert float(blocks[1]["weight [kN]"]) == pytest.approx(50)
     faces = _read_csv(out / "interfaces.csv")
     assert len(faces) == 2
-    for key in ("block_a", "block_b", "kind", "length [m]", "normal_force [kN]",
-                "shear_force [kN]", "normal_stress [kPa]", "shear_stress [kPa]", "state",
-                "local_fos", "first_failure"):
+    for key in (
+        "block_a",
+        "block_b",
+        "kind",
+        "length [m]",
+        "normal_force [kN]",
+        "shear_force [kN]",
+        "normal_stress [kPa]",
+        "shear_stress [kPa]",
+        "state",
+        "local_fos",
+        "first_failure",
+    ):
         assert key in faces[0]
     base = next(f for f in faces if {f["block_a"], f["block_b"]} == {"0", "1"})
     assert float(base["normal_force [kN]"]) == pytest.approx(100, rel=1e-6)  # both blocks on it
@@ -255,6 +264,22 @@ def test_fos_human_output():
     assert "bracket: stable at 0.97" in r.stdout
 
 
+def test_fos_states_where_a_confirmed_failure_is_confirmed():
+    """The toppling example's failure is confirmed by dynamic relaxation 2%
+    beyond the bracket, not proven: the JSON gives that factor, and the text
+    and the trust statements say that between the two nothing proves or
+    confirms failure."""
+    data = json.loads(invoke("fos", "-e", "toppling", "--json").stdout)
+    hi = data["bracket"][1]
+    assert data["proof"] == "dynamic-relaxation" and data["certified_upper_bound"] is None
+    assert data["confirmed_upper_bound"] == pytest.approx(1.02 * hi, rel=1e-9)
+    assert any("neither proven nor confirmed" in t for t in data["trust"])
+    text = invoke("fos", "-e", "toppling").stdout
+    assert f"failure confirmed at F = {1.02 * hi:.4f}" in text
+    wedge = json.loads(invoke("fos", "-e", "wedge-verification", "--json").stdout)
+    assert wedge["proof"] == "lp-certificate" and wedge["confirmed_upper_bound"] is None
+
+
 def test_fos_no_failure_has_open_bracket(box):
     text = box.read_text().replace("friction_angle: 30}", "friction_angle: 30, cohesion: 1.0e+9}")
     box.write_text(text)
@@ -388,7 +413,11 @@ def _python_m(*args, cwd=None):
     env = dict(os.environ, COLUMNS="120")
     return subprocess.run(
         [sys.executable, "-m", "rockdem", *map(str, args)],
-        capture_output=True, text=True, cwd=cwd, env=env, timeout=120,
+        capture_output=True,
+        text=True,
+        cwd=cwd,
+        env=env,
+        timeout=120,
     )
 
 
@@ -407,8 +436,15 @@ def test_subprocess_fos_example_json():
     assert p.stderr == ""
 
 
-@pytest.mark.parametrize("name", ["friction-with-unit.yaml", "yaml-syntax.yaml",
-                                  "overlapping-blocks.yaml", "toml-unknown-key.toml"])
+@pytest.mark.parametrize(
+    "name",
+    [
+        "friction-with-unit.yaml",
+        "yaml-syntax.yaml",
+        "overlapping-blocks.yaml",
+        "toml-unknown-key.toml",
+    ],
+)
 def test_subprocess_bad_input(name):
     p = _python_m("run", BROKEN / name)
     assert p.returncode == 2

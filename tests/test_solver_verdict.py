@@ -137,6 +137,15 @@ def test_generated_bedded_slopes_match_planar_sliding(seed):
     exact = np.tan(np.radians(phi)) / np.tan(np.radians(dip))
     fos = rd.factor_of_safety(model)
     assert fos.value == pytest.approx(exact, rel=0.01), (dip, phi, fos)
+    _assert_limit_below_the_stated_top(fos, exact)
+
+
+def _assert_limit_below_the_stated_top(fos, exact):
+    """The limit lies below where failure is proven (LP) or confirmed (dynamic
+    relaxation), and no equilibrium is claimed beyond it."""
+    top = fos.certified_upper_bound or fos.confirmed_upper_bound
+    assert top is not None and exact <= top * (1 + 1e-6), (exact, fos.proof, top)
+    assert fos.bracket[0] <= exact * (1 + 1e-6)
 
 
 def _sized_family(i):
@@ -181,7 +190,7 @@ def test_generated_slopes_of_200_to_3000_blocks_match_planar_sliding(i):
     exact = np.tan(np.radians(phi)) / np.tan(np.radians(dip))
     fos = rd.factor_of_safety(model)
     assert fos.value == pytest.approx(exact, rel=0.01), (n, dip, phi, fos)
-    assert fos.bracket[0] <= exact * (1 + 1e-6)  # no equilibrium beyond the planar limit
+    _assert_limit_below_the_stated_top(fos, exact)
 
 
 @pytest.mark.slow
@@ -200,6 +209,7 @@ def test_a_mechanism_only_at_the_farther_margin_widens_the_bracket_to_it(monkeyp
     fos = rd.factor_of_safety(model)
     assert fos.bracket[0] <= exact <= fos.bracket[1]
     assert fos.proof == "dynamic-relaxation"
+    assert fos.confirmed_upper_bound == fos.bracket[1]
     assert "5% beyond the bracket" in fos.failed_analysis.evidence.relaxation
 
 

@@ -386,15 +386,16 @@ def confirm_failed_trial(system, failed, base, factor: float, trials):
         done += run.steps
         run = replace(run, steps=done)
     text = f"{run} at F = {beyond:.6g} ({margin:.0%} beyond the bracket)"
-    failed = _with_relaxation(failed, text)
+    failed = _with_relaxation(failed, text, beyond if run.status == "mechanism" else None)
     trials = list(trials)
     last_failed = max(i for i, t in enumerate(trials) if not t.stable)
     trials[last_failed] = replace(trials[last_failed], evidence=failed.evidence)
     return failed, trials, run, beyond, first
 
 
-def _with_relaxation(failed, text: str):
-    """``failed`` (an Analysis) with ``text`` as its last step's relaxation evidence."""
+def _with_relaxation(failed, text: str, confirmed_at: float | None = None):
+    """``failed`` (an Analysis) with ``text`` as its last step's relaxation
+    evidence (and the strength factor where it confirmed a mechanism)."""
     last = failed.steps[-1]
-    ev = replace(last.evidence, relaxation=text)
+    ev = replace(last.evidence, relaxation=text, confirmed_at=confirmed_at)
     return replace(failed, steps=(*failed.steps[:-1], replace(last, evidence=ev)))

@@ -349,6 +349,7 @@ def fos_summary(fos) -> dict[str, Any]:
             "mode": fos.mode,
             "proof": fos.proof,
             "certified_upper_bound": fos.certified_upper_bound,
+            "confirmed_upper_bound": fos.confirmed_upper_bound,
             "relaxation": None if failed is None else failed.evidence.relaxation,
             "trust": [] if base is None else trust_statements(base, fos),
             "definition": fos.definition,

@@ -60,6 +60,9 @@ class Evidence:
     certified_at: float | None = None
     #: dynamic relaxation's statement on the failure (rockdem.relaxation)
     relaxation: str | None = None
+    #: the strength factor at which dynamic relaxation left the blocks moving
+    #: (a little beyond the bracket: the failure is confirmed there, not below)
+    confirmed_at: float | None = None
 
     @property
     def proof(self) -> str | None:
@@ -350,6 +353,16 @@ class FactorOfSafety:
             if not t.stable and t.evidence.certified and t.evidence.certified_at is not None
         ]
         return min(bounds) if bounds else None
+
+    @property
+    def confirmed_upper_bound(self) -> float | None:
+        """Where the failure is confirmed by dynamic relaxation (proof
+        ``"dynamic-relaxation"``): a little beyond the bracket, which ends
+        where Newton lost equilibrium.  The limit lies below it; between the
+        bracket and it, nothing proves or confirms failure.  None otherwise."""
+        if self.proof != "dynamic-relaxation":
+            return None
+        return self.failed_analysis.evidence.confirmed_at
 
     def __repr__(self) -> str:
         if self.value is None:

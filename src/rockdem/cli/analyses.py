@@ -359,6 +359,12 @@ def _print_fos(doc: dict[str, Any]) -> None:
             out.print(f"  ({escape(doc['relaxation'])})")
         if doc.get("certified_upper_bound") is not None:
             out.print(f"rigorous upper bound (equilibrium LP): {doc['certified_upper_bound']:.4f}")
+        top = doc.get("confirmed_upper_bound")
+        if top is not None and top > hi:
+            out.print(
+                f"failure confirmed at F = {top:.4f}; between {hi:.4f} and {top:.4f} it is "
+                f"neither proven nor confirmed (the limit lies below {top:.4f})"
+            )
     elif doc["mode"] == "no-failure":
         out.print(
             f"factor of safety: > {lo:.4g} (no failure up to the largest factor tried, {n} trials)"
