@@ -749,12 +749,18 @@ def test_bounded_reading_keeps_normal_files_working(tmp_path):
         ("bedding: {", '"bed\\nding": {', "'bed\\nding' holds a control character"),
         ("units: kN", 'name: "\\e[2J\\e[31mHACKED"\nunits: kN', "name: the name"),
         ("units: kN", "units: kN \x07", "not valid YAML: character #x0007"),
+        (
+            "units: kN",
+            'loads: {points: [{at: [1, 1], force: [1, 0], name: "P\\nX\\e[31m"}]}\nunits: kN',
+            "loads.points[0].name: the name",
+        ),
     ],
 )
 def test_control_characters_in_keys_names_and_text_are_refused(tmp_path, old, new, fragment):
     """A line break in a joint name broke the DXF export after the analysis;
     an escape in the model's name drove the terminal; a BEL byte gave a
-    two-line YAML message with no line."""
+    two-line YAML message with no line; a bolt's or a load's name with a line
+    break and an escape wrote a line of its own in `run` and coloured it."""
     line = assert_refused(check(tmp_path, BOX.replace(old, new, 1)), fragment)
     assert "\x1b" not in line
 

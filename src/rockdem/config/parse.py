@@ -281,18 +281,21 @@ def _check_depth(data: Any, source: str) -> None:
 
 
 def _check_keys(data: dict, source: str) -> None:
-    """Refuse control characters in every key and in the model's name."""
-    todo: list[Any] = [data]
+    """Refuse control characters in every key and in every ``name`` (the
+    model's, a bolt's, a support's, a load's: printed in tables and reports;
+    fuzzing: a bolt named "B1\\nFAKE LINE\\x1b[31m" wrote a line of its own and
+    coloured the terminal)."""
+    todo: list[tuple[Any, str]] = [(data, "")]
     while todo:
-        item = todo.pop()
+        item, path = todo.pop()
         if isinstance(item, dict):
             for key in item:
                 _check_name(key, source)
-            todo.extend(item.values())
+            if isinstance(item.get("name"), str):
+                _check_name(item["name"], source, f"{path}.name" if path else "name")
+            todo.extend((v, f"{path}.{k}" if path else str(k)) for k, v in item.items())
         elif isinstance(item, list):
-            todo.extend(item)
-    if isinstance(data.get("name"), str):
-        _check_name(data["name"], source, "name")
+            todo.extend((v, f"{path}[{i}]") for i, v in enumerate(item))
 
 
 #: control characters (line breaks, escapes): never in a key or a name, which
