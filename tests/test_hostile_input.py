@@ -969,6 +969,12 @@ def test_a_loose_equilibrium_tolerance_is_warned_about(tmp_path):
     assert r.returncode == 0
     warned = [ln for ln in r.stderr.splitlines() if ln.startswith("warning: ")]
     assert len(warned) == 1 and "loose.yaml:55: analysis.tolerance 0.00999" in warned[0]
+    # in Python, a warning of its own category (it was a bare logged line)
+    from rockdem.config import load_model
+
+    with pytest.warns(rd.ModelWarning, match=r"loose.yaml:55: analysis.tolerance 0.00999") as got:
+        load_model(tmp_path / "loose.yaml")
+    assert got[0].filename == __file__  # shown at the caller's line
 
 
 @pytest.mark.parametrize(

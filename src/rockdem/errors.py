@@ -13,6 +13,13 @@ class RockdemError(Exception):
     """Base class of every error rockdem raises on purpose."""
 
 
+class ModelWarning(UserWarning):
+    """A model that builds but may not be what was meant (a joint line along
+    no contact, a loose equilibrium tolerance): issued with :mod:`warnings`,
+    so that Python callers see its category and can filter it; the command
+    line prints it as ``warning: ...``."""
+
+
 class InputError(RockdemError, ValueError):
     """Bad input: the message names the item at fault and how to fix it.
 

@@ -4,7 +4,6 @@ errors and exit codes, loading the model, progress bars and JSON output."""
 from __future__ import annotations
 
 import json
-import logging
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
@@ -144,21 +143,28 @@ def _root(
     _show_warnings()
 
 
-class _WarningLine(logging.Handler):
-    """rockdem's logged warnings as ``warning: ...`` lines on the current stderr."""
-
-    def emit(self, record: logging.LogRecord) -> None:
-        text = " ".join(record.getMessage().split())  # one line, whatever the message
-        err.print(f"warning: {escape(text)}")
-
-
 def _show_warnings() -> None:
-    """Print what rockdem logs at WARNING and above (once per process)."""
-    logger = logging.getLogger("rockdem")
-    if not any(isinstance(h, _WarningLine) for h in logger.handlers):
-        handler = _WarningLine(logging.WARNING)
-        logger.addHandler(handler)
-        logger.propagate = False
+    """Print rockdem's :class:`~rockdem.errors.ModelWarning` as one ``warning:
+    ...`` line each on the current stderr, every time it is issued (other
+    warnings as Python shows them)."""
+    import warnings
+
+    from ..errors import ModelWarning
+
+    warnings.simplefilter("always", ModelWarning)
+    if getattr(warnings.showwarning, "rockdem", False):
+        return
+    previous = warnings.showwarning
+
+    def show(message, category, filename, lineno, file=None, line=None):
+        if issubclass(category, ModelWarning):
+            text = " ".join(str(message).split())  # one line, whatever the message
+            err.print(f"warning: {escape(text)}")
+        else:
+            previous(message, category, filename, lineno, file, line)
+
+    show.rockdem = True
+    warnings.showwarning = show
 
 
 # ------------------------------------------------------------------ errors

@@ -4,41 +4,36 @@ builds but may not be what was meant."""
 
 from __future__ import annotations
 
-import logging
 import re
+import warnings
 from typing import Any
 
-from ..errors import InputError
+from ..errors import InputError, ModelWarning
 from ..interfaces import lines_along_no_contact
 from .errors import Loc, ModelFileError, _keypath, _line
 from .spec import ModelFile
-
-log = logging.getLogger(__name__)
-
 
 #: an equilibrium tolerance above this is warned about (the default is 1e-8)
 LOOSE_TOLERANCE = 1e-5
 
 
 def _warn_loose_tolerance(tolerance: float, source: str, nodes: Any) -> None:
-    """Log a warning for a tolerance loose enough to move the results (found
+    """Warn for a tolerance loose enough to move the results (found
     by fuzzing: 0.00999, allowed, gave the paper's wedge 0.9991 for 0.9786)."""
     if tolerance <= LOOSE_TOLERANCE:
         return
     line = _line(nodes, ("analysis", "tolerance"))
     where = f"{source}:{line}" if line else source
-    log.warning(
-        "%s: analysis.tolerance %g counts out-of-balance forces up to that share of the "
-        "loads as equilibrium, so a stable result or the low end of a factor of safety's "
-        "bracket may be no equilibrium (the paper's wedge: 0.9805 at 1e-3 and 0.9991 at "
-        "0.00999, against 0.9786); keep the default 1e-8 unless you know why",
-        where,
-        tolerance,
+    _warn(
+        f"{where}: analysis.tolerance {tolerance:g} counts out-of-balance forces up to that "
+        "share of the loads as equilibrium, so a stable result or the low end of a factor "
+        "of safety's bracket may be no equilibrium (the paper's wedge: 0.9805 at 1e-3 and "
+        "0.9991 at 0.00999, against 0.9786); keep the default 1e-8 unless you know why"
     )
 
 
 def _warn_unused_lines(system, cfg: ModelFile, own_lines: int, source: str, nodes: Any) -> None:
-    """Log one warning naming the file's own joint lines that lie along no
+    """Warn once, naming the file's own joint lines that lie along no
     contact: their joints are used nowhere, and a contact one was meant for
     keeps the default joint (found by fuzzing: a weak joint drawn 1 mm off
     the base of a block left it on the strong default, STABLE instead of
@@ -64,7 +59,12 @@ def _warn_unused_lines(system, cfg: ModelFile, own_lines: int, source: str, node
             "they give their joints to none (a trace through the fixed ground or inside a "
             "block); check their points if they were meant for one"
         )
-    log.warning("%s: %s along no contact between blocks: %s", where, what, fix)
+    _warn(f"{where}: {what} along no contact between blocks: {fix}")
+
+
+def _warn(text: str) -> None:
+    """Issue a :class:`ModelWarning` (at the caller of ``load_model``)."""
+    warnings.warn(ModelWarning(text), stacklevel=5)
 
 
 _BLOCK = re.compile(r"^blocks? (-?\d+)")
