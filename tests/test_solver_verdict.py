@@ -66,6 +66,24 @@ def test_toppling_block_failure_is_proven():
     assert a.evidence.proof == "lp-certificate"
 
 
+def test_an_unproven_failure_is_undecided_not_unstable():
+    """A stall is no verdict (issue 9): the wedge's failure with its proof
+    taken away (no LP certificate, no relaxation statement) reads
+    "undecided", in the result, its JSON and the report, not "unstable"."""
+    from rockdem.report import _verdict
+    from rockdem.result_tables import analysis_summary
+
+    a = rd.analyse(V.two_block_wedge(35, 30))
+    assert a.verdict == "unstable"
+    last = a.steps[-1]
+    bare = replace(last.evidence, certified=None, certificate=None, relaxation=None)
+    b = replace(a, steps=(*a.steps[:-1], replace(last, evidence=bare)))
+    assert b.evidence.proof == "undecided" and b.verdict == "undecided"
+    assert analysis_summary(b)["verdict"] == "undecided"
+    html = _verdict(b, None)
+    assert 'class="verdict undecided"' in html and "UNDECIDED" in html and "UNSTABLE" not in html
+
+
 def test_stable_result_has_no_proof_kind():
     a = rd.analyse(V.two_block_wedge(36, 30))
     assert a.stable

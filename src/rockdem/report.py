@@ -118,12 +118,13 @@ def _inputs(model: Model, system, units: str | None) -> str:
 
 
 def _verdict(a: Analysis, fos: FactorOfSafety | None) -> str:
-    cls = "stable" if a.stable else "unstable"
+    cls = a.verdict
     F = f"F = {format_factor(a.strength_factor)}"
     text = (
         f"STABLE under the full loads ({F})"
         if a.stable
-        else f"UNSTABLE: no equilibrium beyond load factor {a.load_factor:.3g} ({F})"
+        else f"{a.verdict.upper()}: no equilibrium beyond load factor {a.load_factor:.3g} ({F})"
+        + ("; failure neither proven nor confirmed" if a.verdict == "undecided" else "")
     )
     parts = [f'<div class="verdict {cls}" id="verdict">{esc(text)}</div>']
     if fos is not None:

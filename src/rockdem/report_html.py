@@ -19,6 +19,7 @@ h1{margin-bottom:.2em}h2{border-bottom:2px solid #0072B2;padding-bottom:.15em;ma
 .verdict{display:inline-block;padding:.6em 1em;border-radius:6px;font-size:1.15em;margin:.4em 0}
 .stable{background:#d7f0e6;border:2px solid #009E73}
 .unstable{background:#f9e0cc;border:2px solid #D55E00}
+.undecided{background:#fbf3d0;border:2px solid #E69F00}
 .fos{font-size:1.3em;font-weight:600}
 table{border-collapse:collapse;margin:.5em 0 1em;font-size:.88em}
 th,td{border:1px solid #ccc;padding:.2em .55em;text-align:right}

@@ -279,7 +279,12 @@ class Analysis:
 
     @property
     def verdict(self) -> str:
-        return "stable" if self.stable else "unstable"
+        """``"stable"``, ``"unstable"`` (failure proven by the LP or confirmed by
+        dynamic relaxation) or ``"undecided"`` (no equilibrium found, but
+        nothing proves or confirms failure: a stall is no verdict)."""
+        if self.stable:
+            return "stable"
+        return "undecided" if self.evidence.proof == "undecided" else "unstable"
 
     def __repr__(self) -> str:
         return (

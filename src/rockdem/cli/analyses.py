@@ -176,8 +176,13 @@ def _print_run(doc: dict[str, Any], result) -> None:
         for line in relaxed_steps(result):
             out.print(f"note: {escape(line)}")
     else:
+        word = (
+            "[bold yellow]UNDECIDED[/bold yellow]"
+            if doc["verdict"] == "undecided"
+            else "[bold red]UNSTABLE[/bold red]"
+        )
         out.print(
-            f"verdict: [bold red]UNSTABLE[/bold red]: no equilibrium at load step {n} "
+            f"verdict: {word}: no equilibrium at load step {n} "
             f"(last equilibrium at load factor {doc['load_factor']:.3g}); "
             f"{escape(doc['evidence'])}"
         )

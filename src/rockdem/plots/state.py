@@ -433,11 +433,7 @@ def animate_progressive(
     with writer.saving(fig, str(out), dpi):
         for k, frame in enumerate(fr):
             ax.clear()
-            title = (
-                frame.label
-                if not frame.final
-                else (f"{frame.label} - {'stable' if a.stable else 'unstable'}")
-            )
+            title = frame.label if not frame.final else f"{frame.label} - {a.verdict}"
             plot_failure(a, ax=ax, step=k, unit=unit, title=title, current=False)
             repeat = 1 + (hold if frame.final else 0)
             for _ in range(repeat):
