@@ -265,13 +265,32 @@ def _along_lines(faces: Interfaces, blocks: Blocks, lines) -> tuple[np.ndarray, 
     return f, g
 
 
+#: a joint line along no contact "nearly follows" one when both ends of some
+#: interface lie within this share of the interface's length of the line
+NEARLY_ALONG = 0.05
+
+
 def lines_along_no_contact(faces: Interfaces, blocks: Blocks, lines) -> np.ndarray:
-    """Indices of the joint ``lines`` along which no interface lies: their
-    joint is used nowhere (a line drawn 1 mm off the contact it was meant for)."""
+    """Indices of the joint ``lines`` along which no interface lies, but that
+    nearly follow one: their joint is used nowhere, and a contact they were
+    probably meant for keeps another (a line drawn 1 mm off a block's base).
+    Lines far from every contact (a trace running on through the fixed
+    ground, or into a block, in a drawn section) are not listed."""
     if lines is None or not len(lines):
         return np.zeros(0, dtype=np.int64)
+    lines = np.asarray(lines, dtype=float).reshape(-1, 2, 2)
     _, g = _along_lines(faces, blocks, lines)
-    return np.setdiff1d(np.arange(len(np.asarray(lines).reshape(-1, 2, 2))), g)
+    unused = np.setdiff1d(np.arange(len(lines)), g)
+    if not unused.size or not faces.n_interfaces:
+        return unused
+    length = np.linalg.norm(faces.end - faces.start, axis=1)
+    reach = np.maximum(NEARLY_ALONG * length, blocks.tolerance * 10)
+    geoms = shapely.linestrings(lines[unused])
+    tree = shapely.STRtree(shapely.linestrings(np.stack([faces.start, faces.end], axis=1)))
+    k, f = tree.query(geoms, predicate="dwithin", distance=float(reach.max()))
+    close = shapely.distance(shapely.points(faces.start[f]), geoms[k]) <= reach[f]
+    close &= shapely.distance(shapely.points(faces.end[f]), geoms[k]) <= reach[f]
+    return np.unique(unused[k[close]])
 
 
 def assign_joints(

@@ -34,12 +34,12 @@ def _warn_loose_tolerance(tolerance: float, source: str, nodes: Any) -> None:
 
 def _warn_unused_lines(system, cfg: ModelFile, own_lines: int, source: str, nodes: Any) -> None:
     """Warn once, naming the file's own joint lines that lie along no
-    contact: their joints are used nowhere, and a contact one was meant for
-    keeps the default joint (found by fuzzing: a weak joint drawn 1 mm off
-    the base of a block left it on the strong default, STABLE instead of
-    UNSTABLE, silently).  A warning, not an error: an imported section's
-    traces also run through the fixed ground or end inside a block, and a
-    DXF round trip keeps them."""
+    contact but nearly follow one: their joints are used nowhere, and the
+    contact one was meant for keeps another joint (found by fuzzing: a weak
+    joint drawn 1 mm off the base of a block left it on the strong default,
+    STABLE instead of UNSTABLE, silently).  Lines far from every contact are
+    not named: an imported section's traces run on through the fixed ground
+    or end inside a block, and a DXF round trip keeps them."""
     if not own_lines or system.model.joint_lines is None:
         return
     lines = system.model.joint_lines[:own_lines]
@@ -55,11 +55,8 @@ def _warn_unused_lines(system, cfg: ModelFile, own_lines: int, source: str, node
     else:
         listed = ", ".join(f"[{i}]" for i in unused[:5]) + (", ..." if len(unused) > 5 else "")
         what = f"{len(unused)} of the {own_lines} joint lines (joint_lines{listed}) lie"
-        fix = (
-            "they give their joints to none (a trace through the fixed ground or inside a "
-            "block); check their points if they were meant for one"
-        )
-    _warn(f"{where}: {what} along no contact between blocks: {fix}")
+        fix = "they give their joints to none; check their points if they were meant for one"
+    _warn(f"{where}: {what} along no contact between blocks, but close along one: {fix}")
 
 
 def _warn(text: str) -> None:
