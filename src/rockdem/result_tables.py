@@ -30,6 +30,7 @@ without bolts.
 from __future__ import annotations
 
 import math
+import os
 from typing import Any
 
 import numpy as np
@@ -53,7 +54,7 @@ __all__ = [
 
 
 def jsonable(value: Any) -> Any:
-    """Plain JSON data from numpy scalars and arrays; inf and nan become None."""
+    """Plain JSON data from numpy scalars and arrays (and paths); inf and nan become None."""
     if isinstance(value, dict):
         return {str(k): jsonable(v) for k, v in value.items()}
     if isinstance(value, list | tuple):
@@ -69,6 +70,8 @@ def jsonable(value: Any) -> Any:
         return v if math.isfinite(v) else None
     if isinstance(value, np.str_):
         return str(value)
+    if isinstance(value, os.PathLike):
+        return os.fspath(value)
     return value
 
 

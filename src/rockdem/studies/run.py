@@ -13,7 +13,6 @@ from __future__ import annotations
 import copy
 import hashlib
 import json
-import math
 import os
 import socket
 import time
@@ -416,7 +415,9 @@ def study(
         folder=None if folder is None else str(folder),
     )
     if folder is not None:
-        _write_outputs(folder, plan, table, summary)
+        from .outputs import write_outputs
+
+        write_outputs(folder, plan, table, summary)
     return StudyResult(table, summary)
 
 
@@ -426,66 +427,6 @@ def _count(counts: dict, row: dict) -> None:
     else:
         counts["ok"] += 1
         counts["failed"] += bool(row.get("failed"))
-
-
-# ================================================================ outputs
-def _write_outputs(folder: Path, plan: Plan, table, summary: dict) -> None:
-    from .store import _atomic_write, worst_digest
-
-    worst_dir = folder / "worst"
-    for old in worst_dir.glob("sample-*.yaml"):  # (checked unedited at the start)
-        old.unlink()
-    written = []
-    rows = table.set_index("sample")
-    for i in summary["worst"]:
-        worst_dir.mkdir(exist_ok=True)
-        path = worst_dir / f"sample-{i:06d}.yaml"
-        _write_sample_model(path, plan, i, rows.loc[i])
-        written.append(str(path.relative_to(folder)))
-    summary["worst_files"] = written
-    # what each held, so that the next run into this folder can tell an edit
-    summary["worst_digests"] = {
-        path.relative_to(folder).as_posix(): worst_digest(path)
-        for path in worst_dir.glob("sample-*.yaml")
-    }
-    from .plots import write_pictures
-
-    summary["pictures"] = write_pictures(folder, table, summary, plan.names)
-    text = json.dumps(_jsonable(summary), indent=1, allow_nan=False) + "\n"
-    _atomic_write(folder / "summary.json", lambda tmp: tmp.write_text(text, encoding="utf-8"))
-
-
-def _write_sample_model(path: Path, plan: Plan, sample: int, row) -> None:
-    import yaml
-
-    from .store import _atomic_write
-
-    doc = sample_document(plan, sample)
-    fs = row["fs"]
-    head = [
-        f"# rockdem study: sample {sample} of {plan.source}",
-        f"# factor of safety {fs:.4f}" if fs == fs else f"# mode {row['mode']}",
-        "# inputs:",
-        *(f"#   {n} = {float(row[n])!r}" for n in plan.names),
-        f"# replay: rockdem fos {path.name}",
-        "",
-    ]
-    text = "\n".join(head) + yaml.safe_dump(doc, sort_keys=False, allow_unicode=True)
-    _atomic_write(path, lambda tmp: tmp.write_text(text, encoding="utf-8"))
-
-
-def _jsonable(x):
-    if isinstance(x, dict):
-        return {str(k): _jsonable(v) for k, v in x.items()}
-    if isinstance(x, list | tuple):
-        return [_jsonable(v) for v in x]
-    if isinstance(x, float | np.floating):
-        return float(x) if math.isfinite(x) else None
-    if isinstance(x, np.integer):
-        return int(x)
-    if isinstance(x, Path):
-        return str(x)
-    return x
 
 
 def read_study(folder: str | os.PathLike) -> StudyResult:
