@@ -227,22 +227,14 @@ def test_explicit_step_force_is_the_spring_law_bit_for_bit(model, dense):
     f = 0.9 * system.f_ext
     unbalanced = _Unbalanced(system, state.slip, strengths, f)
     BtW = system.assembly.weighted_transpose
-
-    def product(A, x):
-        return A @ x
-
-    if dense:  # the products of a few blocks are dense, summed by einsum (not BLAS)
+    if dense:  # the products of a few blocks are dense (as they were before)
         B, BtW = B.toarray(), BtW.toarray()
-
-        def product(A, x):
-            return np.einsum("ij,j->i", A, x)
-
     for scale in (1e-6, 1e-4, 1e-2):
         q = rng.normal(0, scale, system.assembly.n_dof)
-        d = product(B, q).reshape(-1, 2)
+        d = (B @ q).reshape(-1, 2)
         dn, ds = d[:, 0], d[:, 1]
         p = forces(system.springs, state.slip, strengths, dn, ds)
-        expected = f - product(BtW, p.ravel())
+        expected = f - BtW @ p.ravel()
         assert np.array_equal(unbalanced(q), expected)
     # the points were in every regime of the law at the largest displacements
     pull = system.springs.kn * dn

@@ -78,14 +78,12 @@ EXTENSIONS = 20
 EXTEND_WORK = 1e8
 #: operators with at most this many entries (dense) are multiplied as dense
 #: arrays: a sparse product costs ~8 us of dispatch alone, most of a step on
-#: a model of a few blocks, which may take tens of thousands of steps.  The
-#: dense products go through einsum, not BLAS (2-4 us more per step): a
-#: threaded OpenBLAS product summed in an order that changed with its threads
-#: and with what the process had run before, and the explicit dynamics is
-#: chaotic (on a 2-core AVX-512 machine Goodman & Bray's staircase searched
-#: with grow 1.3 read 1.0147 instead of 1.0204 with other modes, and the
-#: ten-times-larger 75 degree columns 0.297 instead of 0.374 after the other
-#: toppling tests had run; with OPENBLAS_NUM_THREADS=1, or einsum, neither)
+#: a model of a few blocks, which may take tens of thousands of steps.  (The
+#: explicit dynamics is chaotic, and these products go through BLAS, whose
+#: kernels round differently by CPU: on an AVX-512 machine with OpenBLAS's
+#: Haswell kernels forced, OPENBLAS_CORETYPE=Haswell, two toppling tests
+#: fail that pass with its native kernels; summing with einsum instead
+#: passed those two but failed a third with the native kernels.)
 DENSE_ENTRIES = 20_000
 
 
@@ -283,7 +281,7 @@ class _Unbalanced:
         if sp.issparse(self.B):
             self.d[:] = self.B @ q
         else:
-            np.einsum("ij,j->i", self.B, q, out=self.d)
+            np.matmul(self.B, q, out=self.d)
         # the law of spring_law.forces: -sigma = min(kn dn, T); the capacity
         # max(c + sigma tan phi, 0); tau = ks (ds - slip) clipped to it
         pn, ps, cap = self.pn, self.ps, self.cap
@@ -296,10 +294,7 @@ class _Unbalanced:
         ps *= self.ks
         np.negative(cap, out=self.low)
         np.clip(ps, self.low, cap, out=ps)
-        if sp.issparse(self.BtW):
-            r = self.f - self.BtW @ self.p
-        else:
-            r = self.f - np.einsum("ij,j->i", self.BtW, self.p)
+        r = self.f - self.BtW @ self.p
         if self.bolts is not None:
             r -= self.bolts.internal_force(q)
         return r
