@@ -262,6 +262,9 @@ def test_fos_human_output():
     assert r.exit_code == 0
     assert "factor of safety: 0.97" in r.stdout
     assert "bracket: stable at 0.97" in r.stdout
+    # its ends, 6e-5 apart, are printed apart (at 4 decimals both read 0.9786)
+    ends = r.stdout.split("bracket: stable at ")[1].split(" (")[0].split(", unstable at ")
+    assert ends[0] != ends[1] and float(ends[0]) < float(ends[1])
 
 
 def test_fos_states_where_a_confirmed_failure_is_confirmed():

@@ -3,6 +3,7 @@ printed, as JSON, or as result files."""
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 from typing import Annotated, Any
 
@@ -345,6 +346,14 @@ def fos(
         _print_fos(doc)
 
 
+def _digits(lo: float, hi: float) -> int:
+    """Decimals that show a bracket's two ends apart (4 to 8): at 4 the
+    wedge's [0.978577, 0.978638] read "0.9786, 0.9786"."""
+    if not (math.isfinite(lo) and math.isfinite(hi)) or hi <= lo:
+        return 4
+    return int(min(8, max(4, math.ceil(-math.log10(hi - lo)) + 1)))
+
+
 def _print_fos(doc: dict[str, Any]) -> None:
     out.print(f"[bold]{escape(doc['model_name'])}[/bold]  ({escape(doc['model_file'])})")
     lo, hi = doc["bracket"]
@@ -358,7 +367,8 @@ def _print_fos(doc: dict[str, Any]) -> None:
             )
         else:
             out.print(f"factor of safety: [bold]{doc['factor_of_safety']:.4f}[/bold]")
-        out.print(f"bracket: stable at {lo:.4f}, unstable at {hi:.4f} ({n} trials)")
+        d = _digits(lo, hi)
+        out.print(f"bracket: stable at {lo:.{d}f}, unstable at {hi:.{d}f} ({n} trials)")
         out.print(f"unstable end: {_PROOF[doc['proof']]}")
         if doc["proof"] in ("dynamic-relaxation", "undecided") and doc.get("relaxation"):
             out.print(f"  ({escape(doc['relaxation'])})")
