@@ -170,23 +170,20 @@ def failure_modes(a) -> BlockModes:
     group[moving] = np.searchsorted(groups, label[moving])
     load = np.asarray(getattr(system, "f_block", np.zeros((n, 3))))[:, :2]
     limit = getattr(a, "limit_interfaces", None)
-    g_code, g_pivot = _group_modes(
-        group, len(groups), A, B, faces, opening, slip, scale, load, limit
-    )
+    g_code, g_pivot = _group_modes(group, len(groups), A, B, faces, opening, slip, scale, load)
     code[moving] = g_code[group[moving]]
     pivot[moving] = g_pivot[group[moving]]
+    if limit is not None:
+        code, pivot = _at_the_limit(code, pivot, moving, faces, opening, load, limit)
     return BlockModes(code, group, pivot, blocks.ids)
 
 
-def _group_modes(group, n_groups, A, B, faces, opening, slip, scale, load, limit=None):
+def _group_modes(group, n_groups, A, B, faces, opening, slip, scale, load):
     """Mode code and pivot of every rigid group, from its contacts with the rest.
 
     Each contact between a group and anything outside it is one row, seen
     from the group (outward normal, slip of the group); the rules of the
-    module docstring are per-group reductions over these rows.  ``limit``:
-    the interfaces at the last equilibrium before the limit, which decide
-    between sliding and toppling where the group stood on its base there
-    (see :func:`_at_the_limit`).
+    module docstring are per-group reductions over these rows.
     """
     G = n_groups
     ga, gb = group[A], group[B]
@@ -232,20 +229,6 @@ def _group_modes(group, n_groups, A, B, faces, opening, slip, scale, load, limit
         FALLS,
         np.where(slides, SLIDES, np.where(least <= tol, TOPPLES, SLIDES_AND_TOPPLES)),
     )
-    if limit is not None:
-        main = base & (press >= lean[g] - MAIN_BASE_COS)  # its base proper, not a side
-        code = _at_the_limit(code, g, rows, main, G, faces, limit)
-        # a group read as toppling from the limit although its motion slid
-        # flat: it turns about the corner of its base that stayed closed
-        turns = (code == TOPPLES) | (code == SLIDES_AND_TOPPLES)
-        flat = np.flatnonzero(np.isnan(pivot[:, 0]) & turns)
-        if flat.size:
-            on = main & np.isin(g, flat)
-            corner = opening[rows].argmin(1)
-            for k in np.flatnonzero(on)[np.argsort(-faces.length[rows[on]], kind="stable")]:
-                if np.isnan(pivot[g[k], 0]):
-                    ends = (faces.start[rows[k]], faces.end[rows[k]])
-                    pivot[g[k]] = ends[corner[k]]
     pivot[(code == FALLS) | (code == SLIDES)] = np.nan
     return code, pivot
 
@@ -260,39 +243,77 @@ LIFTED = 0.5
 #: ... and it slipped on its base where this share of the closed part was at
 #: its shear strength
 SLIPPING = 0.99
+#: ... and it slid and toppled where some of its base was open (less than
+#: LIFTED) and at least this share of the closed part at its strength
+PARTLY_SLIPPING = 0.5
 
 
-def _at_the_limit(code, g, rows, base, n_groups, faces, limit):
-    """Sliding or toppling as the contacts stood at the last equilibrium.
+def _at_the_limit(code, pivot, moving, faces, opening, load, limit):
+    """Sliding or toppling of every moving block as its base stood at the last equilibrium.
 
     The mechanism is a run of the blocks a little beyond the limit: there a
     toppling column's toe corner also slips a little (in Goodman & Bray's
     staircase by ~5% of the block speed although its base friction was not
-    exhausted), which the motion alone reads as sliding.  At the limit the
-    base says which: closed and at its strength, the group slides; open
-    over half its length with the closed part below its strength, it
-    topples, as Goodman & Bray's limit equilibrium classes the blocks; open
-    over half its length with the closed corner at its strength, it slides
-    and topples, unless its motion turns about that corner without slipping
-    (then it topples).  Other groups (falling, or on a base that holds) keep
-    the mode of their motion.
+    exhausted), which the motion alone reads as sliding; and the run is
+    chaotic in its detail (a start moved by 1e-9 makes some columns hop off
+    their base or move with a neighbour).  So the decision is made block by
+    block, on the base it had at the limit: the contacts still closed there
+    that its own load presses it onto most (within :data:`MAIN_BASE_COS`).
+    Closed and at its strength, the block slides; open over half its length
+    with the closed part below its strength, it topples, as Goodman & Bray's
+    limit equilibrium classes the blocks; partly open with the closed part
+    at its strength (all of it, or half of it where less than half is open),
+    it slides and topples.  Other blocks (with no closed base there, or on
+    a base that holds, which a brittle joint may still lose) keep the mode
+    of their group's motion.
     """
+    n = len(code)
+    A, B = faces.block_a, faces.block_b
+    rows = np.concatenate([np.arange(len(A)), np.arange(len(A))])
+    blk = np.concatenate([A, B])
+    n_out = np.concatenate([faces.normal, -faces.normal])
+    keep = moving[blk]
+    rows, blk, n_out = rows[keep], blk[keep], n_out[keep]
+    f = load[blk]
+    size = np.hypot(f[:, 0], f[:, 1])
+    down = np.where(size[:, None] > 0, f / np.where(size > 0, size, 1.0)[:, None], [0.0, -1.0])
+    press = np.einsum("ij,ij->i", n_out, down)
+    open_share = np.asarray(limit.open_fraction)[rows]
+    carries = open_share < 1.0  # some of it closed at the limit
+    lean = np.full(n, -np.inf)
+    np.maximum.at(lean, blk[carries], press[carries])
+    base = carries & (press >= lean[blk] - MAIN_BASE_COS)
     length = faces.length[rows] * base
-    opened = length * np.asarray(limit.open_fraction)[rows]
+    opened = length * open_share
     slid = length * np.asarray(limit.sliding_fraction)[rows]
-    total = np.bincount(g, length, n_groups)
-    open_len = np.bincount(g, opened, n_groups)
-    closed = total - open_len
-    slipping = (closed > 0) & (np.bincount(g, slid, n_groups) >= SLIPPING * closed)
-    lifted = (total > 0) & (open_len >= LIFTED * total)
-    moving = code != FALLS
+    total = np.bincount(blk, length, n)
+    closed = total - np.bincount(blk, opened, n)
+    slid_total = np.bincount(blk, slid, n)
+    slipping = (closed > 0) & (slid_total >= SLIPPING * closed)
+    lifted = (total > 0) & (total - closed >= LIFTED * total)
+    judged = moving  # a block that hops off its base beyond the limit still slid there
     out = code.copy()
-    out[moving & slipping & ~lifted] = SLIDES
-    # on a corner at its strength: it topples and slides unless its motion
-    # turns about that corner without slipping
-    out[moving & slipping & lifted & (code != TOPPLES)] = SLIDES_AND_TOPPLES
-    out[moving & ~slipping & lifted] = TOPPLES
-    return out
+    out[judged & slipping & ~lifted] = SLIDES
+    out[judged & slipping & lifted] = SLIDES_AND_TOPPLES
+    out[judged & ~slipping & lifted] = TOPPLES
+    # its heel lifting a little with most of the rest at its strength: it
+    # slides and topples (below its strength, a brittle base may still break
+    # and slide: the motion says)
+    partly = judged & ~slipping & ~lifted & (closed < total)
+    out[partly & (slid_total >= PARTLY_SLIPPING * closed)] = SLIDES_AND_TOPPLES
+    # a block read as toppling from the limit although its motion slid flat
+    # turns about the corner of its longest base that the motion keeps closest
+    pivot = pivot.copy()
+    turns = (out == TOPPLES) | (out == SLIDES_AND_TOPPLES)
+    need = np.flatnonzero(base & turns[blk] & np.isnan(pivot[blk, 0]))
+    if need.size:
+        need = need[np.lexsort((-faces.length[rows[need]], blk[need]))]
+        first = need[np.r_[True, blk[need][1:] != blk[need][:-1]]]
+        r = rows[first]
+        closer = opening[r].argmin(1) == 0
+        pivot[blk[first]] = np.where(closer[:, None], faces.start[r], faces.end[r])
+    pivot[(out == FALLS) | (out == SLIDES) | (out == STABLE)] = np.nan
+    return out, pivot
 
 
 # ----------------------------------------------------------- model boundary
