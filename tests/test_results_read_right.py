@@ -480,8 +480,13 @@ def test_cli_json_csv_and_report_carry_modes_and_boundary_warnings(tmp_path):
     with (out / "blocks.csv").open() as fh:
         rows = {r["id"]: r for r in csv.DictReader(fh)}
     assert rows["2"]["failure_mode"] == "slides" and rows["0"]["failure_mode"] == "fixed"
+    # at the limit the slab's base was closed and at its strength: the mode is read there
+    assert (
+        rows["2"]["failure_mode_read_from"] == "limit" and rows["0"]["failure_mode_read_from"] == ""
+    )
     fos_doc = json.loads((out / "result.json").read_text())
     assert fos_doc["failure_modes"] == {"slides": [2]} and fos_doc["warnings"]
+    assert fos_doc["failure_modes_from_motion"] == []
     report = write_report(path, tmp_path / "rep", animation=False, image_format="svg")
     text = report.read_text(encoding="utf-8")
     assert 'class="warning"' in text and "reaches the fixed back boundary at x = -8" in text

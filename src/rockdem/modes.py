@@ -103,12 +103,18 @@ class BlockModes:
         The contact corner a toppling block turns about (NaN otherwise).
     ids : ndarray of int
         Block ids (as in ``Analysis.system.blocks.ids``).
+    decided : ndarray of bool (n_blocks,)
+        The mode was read from the block's base at the last equilibrium
+        before the limit (sliding or lifted there); otherwise from the
+        motion beyond the limit, which is chaotic in its detail for a block
+        at the transition between sliding and toppling.
     """
 
     code: np.ndarray
     group: np.ndarray
     pivot: np.ndarray
     ids: np.ndarray
+    decided: np.ndarray
 
     @property
     def name(self) -> np.ndarray:
@@ -149,7 +155,7 @@ def failure_modes(a) -> BlockModes:
     pivot = np.full((n, 2), np.nan)
     moving = np.asarray(a.unstable, dtype=bool) & ~blocks.fixed
     if a.stable or not moving.any():
-        return BlockModes(code, group, pivot, blocks.ids)
+        return BlockModes(code, group, pivot, blocks.ids, np.zeros(n, dtype=bool))
     motion = oriented_mechanism(a).copy()
     motion[~moving] = 0.0
     scale = _speed_scale(blocks, motion)
@@ -173,9 +179,13 @@ def failure_modes(a) -> BlockModes:
     g_code, g_pivot = _group_modes(group, len(groups), A, B, faces, opening, slip, scale, load)
     code[moving] = g_code[group[moving]]
     pivot[moving] = g_pivot[group[moving]]
+    decided = np.zeros(n, dtype=bool)
     if limit is not None:
-        code, pivot = _at_the_limit(code, pivot, moving, faces, opening, load, limit)
-    return BlockModes(code, group, pivot, blocks.ids)
+        points = system.springs.points_per_interface
+        code, pivot, decided = _at_the_limit(
+            code, pivot, moving, faces, opening, load, limit, points
+        )
+    return BlockModes(code, group, pivot, blocks.ids, decided)
 
 
 def _group_modes(group, n_groups, A, B, faces, opening, slip, scale, load):
@@ -243,12 +253,9 @@ LIFTED = 0.5
 #: ... and it slipped on its base where this share of the closed part was at
 #: its shear strength
 SLIPPING = 0.99
-#: ... and it slid and toppled where some of its base was open (less than
-#: LIFTED) and at least this share of the closed part at its strength
-PARTLY_SLIPPING = 0.5
 
 
-def _at_the_limit(code, pivot, moving, faces, opening, load, limit):
+def _at_the_limit(code, pivot, moving, faces, opening, load, limit, points):
     """Sliding or toppling of every moving block as its base stood at the last equilibrium.
 
     The mechanism is a run of the blocks a little beyond the limit: there a
@@ -259,13 +266,17 @@ def _at_the_limit(code, pivot, moving, faces, opening, load, limit):
     their base or move with a neighbour).  So the decision is made block by
     block, on the base it had at the limit: the contacts still closed there
     that its own load presses it onto most (within :data:`MAIN_BASE_COS`).
-    Closed and at its strength, the block slides; open over half its length
+    Closed and at its strength (all along it, all but one spring point),
+    the block slides; open over half its length
     with the closed part below its strength, it topples, as Goodman & Bray's
-    limit equilibrium classes the blocks; partly open with the closed part
-    at its strength (all of it, or half of it where less than half is open),
-    it slides and topples.  Other blocks (with no closed base there, or on
-    a base that holds, which a brittle joint may still lose) keep the mode
-    of their group's motion.
+    limit equilibrium classes the blocks; open over half its length with
+    the closed part at its strength, it slides and topples.  Other blocks
+    keep the mode of their group's motion (``decided`` False): with no
+    closed base there, or a base partly open and partly at its strength (a
+    block at the transition: Goodman & Bray's staircase on one trial
+    schedule, 1/6 open and 2/3 at strength, turned or slid as the run's
+    round-off went; a layer sliding on bedding stands the same way), or a
+    base that holds (a brittle joint may still lose it).
     """
     n = len(code)
     A, B = faces.block_a, faces.block_b
@@ -289,18 +300,19 @@ def _at_the_limit(code, pivot, moving, faces, opening, load, limit):
     total = np.bincount(blk, length, n)
     closed = total - np.bincount(blk, opened, n)
     slid_total = np.bincount(blk, slid, n)
-    slipping = (closed > 0) & (slid_total >= SLIPPING * closed)
+    # a base closed all along slips with all but its last spring point at
+    # strength (the last equilibrium is the one before that point yields)
+    point = np.zeros(n)
+    np.maximum.at(point, blk, length / points)
+    whole = (closed > 0) & (closed >= total) & (closed - slid_total <= point * (1 + 1e-9))
+    slipping = (closed > 0) & ((slid_total >= SLIPPING * closed) | whole)
     lifted = (total > 0) & (total - closed >= LIFTED * total)
-    judged = moving  # a block that hops off its base beyond the limit still slid there
+    # a block that hops off its base beyond the limit still slid there
+    decided = moving & (slipping | lifted)
     out = code.copy()
-    out[judged & slipping & ~lifted] = SLIDES
-    out[judged & slipping & lifted] = SLIDES_AND_TOPPLES
-    out[judged & ~slipping & lifted] = TOPPLES
-    # its heel lifting a little with most of the rest at its strength: it
-    # slides and topples (below its strength, a brittle base may still break
-    # and slide: the motion says)
-    partly = judged & ~slipping & ~lifted & (closed < total)
-    out[partly & (slid_total >= PARTLY_SLIPPING * closed)] = SLIDES_AND_TOPPLES
+    out[decided & slipping & ~lifted] = SLIDES
+    out[decided & slipping & lifted] = SLIDES_AND_TOPPLES
+    out[decided & ~slipping & lifted] = TOPPLES
     # a block read as toppling from the limit although its motion slid flat
     # turns about the corner of its longest base that the motion keeps closest
     pivot = pivot.copy()
@@ -313,7 +325,7 @@ def _at_the_limit(code, pivot, moving, faces, opening, load, limit):
         closer = opening[r].argmin(1) == 0
         pivot[blk[first]] = np.where(closer[:, None], faces.start[r], faces.end[r])
     pivot[(out == FALLS) | (out == SLIDES) | (out == STABLE)] = np.nan
-    return out, pivot
+    return out, pivot, decided
 
 
 # ----------------------------------------------------------- model boundary

@@ -143,7 +143,7 @@ _COLUMNS = {
     "blocks": list(
         "id fixed area unit_weight weight water_fx water_fy centroid_x centroid_y ux uy "
         "rotation unstable "
-        "mechanism_x mechanism_y mechanism_rotation failure_mode".split()
+        "mechanism_x mechanism_y mechanism_rotation failure_mode failure_mode_read_from".split()
     ),
     "interfaces": list(
         "interface block_a block_b kind start_x start_y end_x end_y length normal_force "

@@ -17,7 +17,9 @@ interface first failed, -1 if never; ``local_fos`` is the full shear strength
 over the shear stress (``inf`` where unstressed).  In ``springs.csv``,
 ``capacity`` is the full shear strength (F = 1) and ``strength_at_factor``
 the strength at the factor the stresses were found at.  ``failure_mode`` (in
-``blocks.csv``) is the block's mode at the limit (:mod:`rockdem.modes`).
+``blocks.csv``) is the block's mode at the limit (:mod:`rockdem.modes`);
+``failure_mode_read_from`` says whether the last equilibrium decided it
+(``limit``) or the run beyond the limit did (``motion``).
 ``bolts.csv`` has a row per joint a bolt crosses (:mod:`rockdem.bolts`):
 ``extension`` and ``offset`` of the bolt across the joint, ``axial_force``
 (tension positive) and ``shear_force`` per bolt, ``axial_capacity`` there
@@ -92,7 +94,10 @@ def analysis_tables(analysis, modes=None) -> dict[str, list[dict[str, Any]]]:
     system = analysis.system
     b = system.blocks
     d, mech = analysis.displacement, analysis.mechanism
-    mode = np.where(b.fixed, "fixed", (modes or failure_modes(analysis)).name)
+    modes = modes or failure_modes(analysis)
+    mode = np.where(b.fixed, "fixed", modes.name)
+    moving = modes.code > 0
+    read = np.where(moving & modes.decided, "limit", np.where(moving, "motion", ""))
     water = water_loads(b, system.interfaces, joint_water(b, system.model.loads))
     blocks = [
         {
@@ -113,6 +118,7 @@ def analysis_tables(analysis, modes=None) -> dict[str, list[dict[str, Any]]]:
             "mechanism_y": float(mech[i, 1]),
             "mechanism_rotation": float(mech[i, 2]),
             "failure_mode": str(mode[i]),
+            "failure_mode_read_from": str(read[i]),
         }
         for i in range(b.n_blocks)
     ]
@@ -265,17 +271,27 @@ def state_counts(analysis) -> dict[str, dict[str, int]]:
 
 def mechanism_summary(analysis) -> dict[str, Any]:
     """What the mechanism does: ``failure_modes`` (ids of the moving blocks by
-    mode), ``boundary_contacts`` (where it touches a fixed side of the model),
+    mode), ``failure_modes_from_motion`` (those whose mode the last
+    equilibrium did not decide, read from the run beyond the limit, chaotic
+    in its detail: see :class:`~rockdem.modes.BlockModes`),
+    ``boundary_contacts`` (where it touches a fixed side of the model),
     ``warnings`` (one sentence each) and ``slip_polylines`` (the slip surface
     as ordered polylines with the stresses of each segment); all empty for a
     stable analysis."""
     if analysis is None or analysis.stable:
-        return {"failure_modes": {}, "boundary_contacts": [], "warnings": [], "slip_polylines": []}
+        return {
+            "failure_modes": {},
+            "failure_modes_from_motion": [],
+            "boundary_contacts": [],
+            "warnings": [],
+            "slip_polylines": [],
+        }
     modes = failure_modes(analysis)
     by_mode = {m: [int(i) for i in modes.blocks(m)] for m in MODES if m != "stable"}
     contacts = boundary_contacts(analysis)
     return {
         "failure_modes": {m: ids for m, ids in by_mode.items() if ids},
+        "failure_modes_from_motion": [int(i) for i in modes.ids[(modes.code > 0) & ~modes.decided]],
         "boundary_contacts": [
             {
                 "side": c.side,
