@@ -24,7 +24,7 @@ from .analysis import analyse
 from .model import Model
 from .report_html import CSS, esc, figure_uri, html_table, img, num
 from .report_tables import bolts_table, failed_table, state_counts, unstable_table, warnings_html
-from .results import Analysis, FactorOfSafety, format_factor
+from .results import Analysis, FactorOfSafety, bracket_decimals, format_factor
 from .strength_reduction import factor_of_safety
 from .trust import trust_statements
 from .units import parse_units
@@ -136,9 +136,10 @@ def _verdict(a: Analysis, fos: FactorOfSafety | None) -> str:
                 "confirmed there)</p>"
             )
         elif fos.value is not None:
+            d = bracket_decimals(lo, hi)
             parts.append(
                 f'<p class="fos" id="fos">Factor of safety F = {fos.value:.3f} '
-                f"(bracket {lo:.4f} - {num(hi, '.4f')})</p>"
+                f"(bracket {lo:.{d}f} - {num(hi, f'.{d}f')})</p>"
             )
         else:
             parts.append(

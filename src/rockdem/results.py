@@ -21,6 +21,14 @@ def format_factor(F: float) -> str:
     return f"{F:.4f}"
 
 
+def bracket_decimals(lo: float, hi: float) -> int:
+    """Decimals that show a bracket's two ends apart (4 to 8): at 4 the
+    wedge's [0.978577, 0.978638] read "0.9786, 0.9786"."""
+    if not (np.isfinite(lo) and np.isfinite(hi)) or hi <= lo:
+        return 4
+    return int(min(8, max(4, np.ceil(-np.log10(hi - lo)) + 1)))
+
+
 #: Current state of a spring point or interface (codes, worst last): never failed
 #: and holding; failed earlier (yielded or broken) but now closed and holding;
 #: at its shear strength now; open now (at or beyond its tensile strength).

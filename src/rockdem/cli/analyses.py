@@ -3,7 +3,6 @@ printed, as JSON, or as result files."""
 
 from __future__ import annotations
 
-import math
 from pathlib import Path
 from typing import Annotated, Any
 
@@ -11,7 +10,7 @@ import typer
 from rich.markup import escape
 from rich.table import Table
 
-from ..results import format_factor
+from ..results import bracket_decimals, format_factor
 from ..units import parse_units
 from .common import (
     DebugOpt,
@@ -346,14 +345,6 @@ def fos(
         _print_fos(doc)
 
 
-def _digits(lo: float, hi: float) -> int:
-    """Decimals that show a bracket's two ends apart (4 to 8): at 4 the
-    wedge's [0.978577, 0.978638] read "0.9786, 0.9786"."""
-    if not (math.isfinite(lo) and math.isfinite(hi)) or hi <= lo:
-        return 4
-    return int(min(8, max(4, math.ceil(-math.log10(hi - lo)) + 1)))
-
-
 def _print_fos(doc: dict[str, Any]) -> None:
     out.print(f"[bold]{escape(doc['model_name'])}[/bold]  ({escape(doc['model_file'])})")
     lo, hi = doc["bracket"]
@@ -367,7 +358,7 @@ def _print_fos(doc: dict[str, Any]) -> None:
             )
         else:
             out.print(f"factor of safety: [bold]{doc['factor_of_safety']:.4f}[/bold]")
-        d = _digits(lo, hi)
+        d = bracket_decimals(lo, hi)
         out.print(f"bracket: stable at {lo:.{d}f}, unstable at {hi:.{d}f} ({n} trials)")
         out.print(f"unstable end: {_PROOF[doc['proof']]}")
         if doc["proof"] in ("dynamic-relaxation", "undecided") and doc.get("relaxation"):
