@@ -234,8 +234,31 @@ def test_fos_plot(fos):
     lines = {ln.get_gid(): ln for ln in ax.lines}
     assert len(lines["trials-stable"].get_xdata()) == stable
     assert len(lines["trials-unstable"].get_xdata()) == len(fos.trials) - stable
+    assert len(lines["trials-undecided"].get_xdata()) == 0
     assert f"{fos.value:.3f}" in ax.get_title()
     assert "displacement" in ax.get_ylabel()
+
+
+def test_fos_plot_tells_a_stall_from_a_failure(fos):
+    """A trial where Newton found no equilibrium but nothing proved or
+    confirmed the failure is drawn apart from the failures (hollow grey), with
+    its own legend entry: it is not a verdict."""
+    from dataclasses import replace
+
+    from rockdem.results import Evidence
+
+    failed = [k for k, t in enumerate(fos.trials) if not t.stable]
+    assert failed and fos.trials[failed[0]].evidence.proof != "undecided"
+    stall = Evidence(reason="stalled", iterations=40, residuals=(1e-3,))
+    assert stall.proof == "undecided"
+    trials = list(fos.trials)
+    trials[failed[0]] = replace(trials[failed[0]], evidence=stall)
+    ax = plots.plot_fos(replace(fos, trials=tuple(trials)), recompute=False)
+    lines = {ln.get_gid(): ln for ln in ax.lines}
+    assert list(lines["trials-undecided"].get_xdata()) == [trials[failed[0]].factor]
+    assert len(lines["trials-unstable"].get_xdata()) == len(failed) - 1
+    labels = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert "none found, failure not proven" in labels
 
 
 def test_fos_plot_without_displacements(fos):

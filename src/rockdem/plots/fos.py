@@ -70,7 +70,10 @@ def plot_fos(
     """Trial factors of the strength-reduction search, their verdict and displacement.
 
     Stable trials are green circles at their largest block displacement;
-    trials without equilibrium are red crosses along the top.  Numbers give
+    trials without equilibrium are red crosses along the top, hollow grey
+    ones where Newton found none but the failure was neither proven (LP)
+    nor confirmed (dynamic relaxation) there (such trials lie inside the
+    bracket).  Numbers give
     the order of the trials; the bracket is shaded and the factor of safety
     drawn as a dashed line.
 
@@ -88,7 +91,8 @@ def plot_fos(
     Returns
     -------
     Axes
-        Line2D gids ``"trials-stable"`` and ``"trials-unstable"``.
+        Line2D gids ``"trials-stable"``, ``"trials-unstable"`` and
+        ``"trials-undecided"``.
     """
     ax = c.new_axes(ax, figsize=(7.0, 4.2))
     trials = fos.trials
@@ -132,14 +136,32 @@ def plot_fos(
         ax.set_yticks([])
         ax.set_ylabel("verdict")
         y_text = None
+    # a failed trial is a failure where the LP proved it or dynamic relaxation
+    # confirmed it, and the bracket counts it (one inside the bracket was
+    # confirmed only farther on); otherwise only Newton found no equilibrium
+    proven = np.array([t.evidence.proof != "undecided" for t in trials], dtype=bool)
+    shown = proven & (F >= fos.bracket[1] * (1 - 1e-12))
     ax.plot(
-        F[~ok],
-        np.full((~ok).sum(), 0.93),
+        F[~ok & shown],
+        np.full((~ok & shown).sum(), 0.93),
         "X",
         color=c.STATE_COLORS[1],
         ms=8,
         zorder=3,
         gid="trials-unstable",
+        ls="none",
+        transform=top,
+    )
+    stalled = ~ok & ~shown
+    ax.plot(
+        F[stalled],
+        np.full(stalled.sum(), 0.93),
+        "X",
+        mfc="none",
+        color="#777777",
+        ms=8,
+        zorder=3,
+        gid="trials-undecided",
         ls="none",
         transform=top,
     )
@@ -174,6 +196,19 @@ def plot_fos(
         Line2D([], [], marker="X", color=c.STATE_COLORS[1], ls="none", label="no equilibrium"),
         Patch(color=c.OKABE_ITO["sky_blue"], alpha=0.35, label="bracket"),
     ]
+    if stalled.any():
+        handles.insert(
+            2,
+            Line2D(
+                [],
+                [],
+                marker="X",
+                mfc="none",
+                color="#777777",
+                ls="none",
+                label="none found, failure not proven",
+            ),
+        )
     if fos.value is not None:
         handles.append(Line2D([], [], color=c.OKABE_ITO["blue"], ls="--", label="F of S"))
     ax.legend(handles=handles, loc="lower right", fontsize=7, framealpha=0.9)
