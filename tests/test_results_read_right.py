@@ -77,15 +77,20 @@ def test_stress_plot_never_shows_shear_above_the_strength_drawn(layers, which):
 
 def test_stress_factor_is_that_of_the_stresses(layers):
     """The F = 1 run of a slope with FS 0.825 finds no equilibrium: its stresses
-    are the solver's last iterate at the factor where equilibrium was lost."""
-    _, run, _ = layers
-    assert not run.stable
-    sp = run.springs
-    intact = (sp.state == 0) & (sp.capacity > 0)
-    assert intact.any()
-    # full strength over strength at the stresses' factor = that factor
-    assert np.allclose(sp.capacity[intact] / sp.strength[intact], run.stress_factor)
-    assert run.stress_factor < 0.9
+    are the solver's last iterate at the factor it was at.  That is F = 1
+    where the equilibrium LP proved the failure before any homotopy, and the
+    factor where equilibrium was lost where the run climbed to it."""
+    model, run, _ = layers
+    climbed = rd.analyse(model, prove_first=False)
+    for a in (run, climbed):
+        assert not a.stable
+        sp = a.springs
+        intact = (sp.state == 0) & (sp.capacity > 0)
+        assert intact.any()
+        # full strength over strength at the stresses' factor = that factor
+        assert np.allclose(sp.capacity[intact] / sp.strength[intact], a.stress_factor)
+    assert run.stress_factor == 1.0 and run.evidence.proof == "lp-certificate"
+    assert climbed.stress_factor < 0.9
 
 
 def test_stress_path_title_lists_the_joints_in_the_order_drawn():

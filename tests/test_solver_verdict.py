@@ -504,7 +504,7 @@ def test_a_search_below_an_unstable_gravity_state_starts_where_it_stopped(monkey
     from rockdem import continuation
 
     system = rd.build_system(V.brick_slope(100, friction_angle=15))
-    first = rd.analyse(system)
+    first = rd.analyse(system, prove_first=False)  # as the search runs it
     assert not first.stable
     lam, reached, q = first.unloaded_limit
     assert lam == first.steps[0].load_factor and reached == first.evidence.reached
@@ -514,15 +514,38 @@ def test_a_search_below_an_unstable_gravity_state_starts_where_it_stopped(monkey
 
     real, released = continuation._release, []
 
-    def release(system_, state, lam_, factor, max_it, resume=None):
+    def release(system_, state, lam_, factor, max_it, resume=None, proven=None):
         released.append(factor)
-        return real(system_, state, lam_, factor, max_it, resume)
+        return real(system_, state, lam_, factor, max_it, resume, proven)
 
     monkeypatch.setattr(continuation, "_release", release)
     fos = rd.factor_of_safety(system)
     assert reached not in released and 1.0 in released
     assert [t.factor for t in fos.trials[:3]] == [1.0, reached, first.evidence.failed_at]
     assert fos.value == pytest.approx(np.tan(np.radians(15)) / np.tan(np.radians(20)), rel=0.01)
+
+
+def test_a_failure_under_gravity_is_proven_before_the_homotopy():
+    """The same slope (Hoek & Bray's planar sliding, FS = tan 15 / tan 20 =
+    0.736 < 1): where Newton cannot release the fictitious strength, the
+    equilibrium LP proves at once that no force field carries the loads;
+    the staged analysis stops there, with the same verdict and moving blocks
+    as after climbing to the limit strength (measured: 50 factorisations
+    against 257)."""
+    system = rd.build_system(V.brick_slope(100, friction_angle=15))
+    before = system.factorizer.count
+    fast = rd.analyse(system)
+    n_fast = system.factorizer.count - before
+    before = system.factorizer.count
+    slow = rd.analyse(system, prove_first=False)
+    n_slow = system.factorizer.count - before
+    assert not fast.stable and fast.verdict == "unstable"
+    assert fast.evidence.proof == slow.evidence.proof == "lp-certificate"
+    assert "the equilibrium LP proves that none exists" in fast.evidence.reason
+    assert fast.evidence.reached is None and fast.unloaded_limit is None
+    assert fast.stress_factor == 1.0 and slow.stress_factor < 0.74
+    assert sorted(fast.unstable_blocks) == sorted(slow.unstable_blocks)
+    assert n_fast < n_slow / 3, (n_fast, n_slow)
 
 
 def test_a_factor_of_safety_below_smallest_that_was_reached_is_found():

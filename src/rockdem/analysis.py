@@ -46,6 +46,7 @@ def _settle(
     total=False,
     resolution=None,
     first: Solve | None = None,
+    proven=None,
 ):
     """Solve at one load level, re-solving while committed failures shed strength.
 
@@ -66,6 +67,7 @@ def _settle(
         q0=q0,
         base_factor=base_factor,
         resolution=resolution,
+        proven=proven,
     )
     iterations, history = sol.iterations, list(sol.residuals)
     for _ in range(MAX_CASCADE):
@@ -136,7 +138,7 @@ def scale_free(system: System) -> bool:
     return system.bolts is None and not any(np.any(a) for a in strengths)
 
 
-def _load_step(system, state, q, lam_prev, lam, factor, stage, start=None):
+def _load_step(system, state, q, lam_prev, lam, factor, stage, start=None, prove_first=False):
     """Settle the load at ``lam`` from equilibrium at ``lam_prev``; where the
     whole increment fails and the equilibrium LP does not prove the load
     beyond every admissible force field, retry it in smaller sub-steps
@@ -151,7 +153,11 @@ def _load_step(system, state, q, lam_prev, lam, factor, stage, start=None):
     load, where the whole step's search starts.  Returns ``(solve, state, q,
     lam_reached, certificate, unloaded_limit)`` (the certificate of the load
     ``lam`` when it was computed, else None; the limit when the whole step
-    failed from the unloaded state, else None).
+    failed from the unloaded state, else None).  ``prove_first``: where
+    Newton cannot release the fictitious strength, solve the equilibrium LP
+    before the strength homotopy, and stop if it proves the load beyond
+    every admissible force field (a 2,952-block slope failing under
+    gravity: the LP in 0.3 s, where the homotopy took 430 iterations).
     """
     full = lam - lam_prev
     inc = full
@@ -159,13 +165,22 @@ def _load_step(system, state, q, lam_prev, lam, factor, stage, start=None):
     cert = limit = None
     if start is not None and not (lam_prev == 0.0 and start[0] == lam):
         start = None
+
+    def proven() -> bool:
+        nonlocal cert
+        if cert is None:
+            cert = certificate_for(system, state, 1.0, factor)
+        return bool(cert.proves_failure and cert.mu < lam)
+
     while True:
         target = min(lam, lam_prev + inc)
         q0 = q * (target / lam_prev) if lam_prev > 0 else q
         base = None
         if start is not None and target == lam:  # at an equilibrium of a weaker factor
             base, q0 = start[1], start[2]
-        sol, new_state = _settle(system, state, q0, target, factor, stage, base)
+        sol, new_state = _settle(
+            system, state, q0, target, factor, stage, base, proven=proven if prove_first else None
+        )
         iterations += sol.iterations
         history += sol.residuals
         if sol.converged:
@@ -253,6 +268,7 @@ def analyse(
     load_steps: int | None = None,
     progress: Callable[[int, int], None] | None = None,
     start: tuple[float, float, np.ndarray] | None = None,
+    prove_first: bool = True,
 ) -> Analysis:
     """Apply the loads in steps and find equilibrium, or the failure mechanism.
 
@@ -269,6 +285,11 @@ def analyse(
         The ``unloaded_limit`` of a failed analysis of the same system at a
         larger strength factor: the first load step starts from its
         equilibrium (at ``start[1]``), not from scratch.
+    prove_first : bool
+        Where Newton cannot find a first equilibrium, ask the equilibrium LP
+        before climbing to the limit strength by a homotopy: a proven
+        failure ends the step at once.  The factor-of-safety search turns it
+        off: there the homotopy's limit state is where its next trials start.
 
     Returns
     -------
@@ -296,7 +317,15 @@ def analyse(
     for k in range(1, n_steps + 1):
         lam = k / n_steps
         sol, state, q, lam_prev, cert, limit = _load_step(
-            system, state, q, lam_prev, lam, strength_factor, k, start if k == 1 else None
+            system,
+            state,
+            q,
+            lam_prev,
+            lam,
+            strength_factor,
+            k,
+            start if k == 1 else None,
+            prove_first,
         )
         ev = _evidence(sol)
         if not sol.converged:  # is the full load beyond every admissible force field?

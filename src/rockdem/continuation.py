@@ -13,6 +13,7 @@ for the limit: by the equilibrium LP on small models
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import replace
 
 import numpy as np
@@ -59,7 +60,7 @@ PROOF_WIDTH = 4
 RELAXED = "converged by dynamic relaxation"
 
 
-def _release(system, state, load_factor, factor, max_it, resume=None) -> Solve:
+def _release(system, state, load_factor, factor, max_it, resume=None, proven=None) -> Solve:
     """Solve from scratch by releasing fictitious strength.
 
     At zero displacement every spring sits on the apex of its Coulomb cone
@@ -75,7 +76,8 @@ def _release(system, state, load_factor, factor, max_it, resume=None) -> Solve:
     releasing on to 1.2e-4 first: 256 s, 124 factorisations).  ``reached``
     reports the smallest ``s`` that converged.
     ``resume = (s, q)``: start from a release that got down to ``s`` (at
-    another strength factor) instead of from ``s = 1``.
+    another strength factor) instead of from ``s = 1``.  ``proven()``: asked
+    at the first failure; True (no equilibrium exists) ends the release.
     """
     asm = system.assembly
     springs = system.springs
@@ -110,6 +112,10 @@ def _release(system, state, load_factor, factor, max_it, resume=None) -> Solve:
         else:
             if s_ok is None:
                 return Solve(False, sol.q, sol.response, total, history, "no start", sol.direction)
+            if proven is not None and proven():
+                reason = f"fictitious strength could not be released below {s_ok:.3g}"
+                resp, _ = residual(system, q, state, load_factor, factor)
+                return Solve(False, q, resp, total, history, reason, sol.direction, s_ok)
             if s == 0.0 and last > RELEASE_FLOOR:
                 # the jump to zero was too long (ref, the largest stress, is far
                 # above the strength of shallow springs): release further first
@@ -133,12 +139,15 @@ def solve_equilibrium(
     base_factor: float | None = None,
     max_iterations: int | None = None,
     resolution: float | None = None,
+    proven: Callable[[], bool] | None = None,
 ) -> Solve:
     """Displacements in equilibrium with the loads, from the committed state.
 
     1. A direct Newton solve from ``q0`` (a short one from scratch).
     2. From scratch, if that fails: release a fictitious strength
-       (:func:`_release`).
+       (:func:`_release`).  Where it cannot all be released and ``proven()``
+       says that no equilibrium exists (the equilibrium LP), stop there: the
+       homotopy below would only find how much weaker the joints must be.
     3. A homotopy in the strength factor, from ``q0`` if it is in equilibrium
        at ``base_factor`` (or from a released state at a smaller factor): the
        strength is reduced step by step to the requested factor, each solve
@@ -173,7 +182,7 @@ def solve_equilibrium(
     if base_factor is not None and q0 is not None:
         F_ok, q_ok = base_factor, q0
     else:
-        start = _release(system, state, load_factor, target, max_it)
+        start = _release(system, state, load_factor, target, max_it, proven=proven)
         total += start.iterations
         history += start.residuals
         if start.converged:
@@ -184,6 +193,9 @@ def solve_equilibrium(
             return Solve(
                 False, start.q, start.response, total, history, start.reason, start.direction
             )
+        if proven is not None and proven():
+            reason = f"{start.reason}; the equilibrium LP proves that none exists"
+            return Solve(False, start.q, start.response, total, history, reason, start.direction)
         # the strengths could not all be released: try the strength homotopy from
         # the weakest fully released state we can find
         F_ok, q_ok = None, None

@@ -84,7 +84,7 @@ def factor_of_safety(
 
     # 1. the staged gravity state at the starting factor (fresh, in load steps)
     F = start
-    first = analyse(system, strength_factor=F)
+    first = analyse(system, strength_factor=F, prove_first=False)
     record(F, first)
     lo_an: Analysis | None = first if first.stable else None
     hi_an: Analysis | None = None if first.stable else first
@@ -113,7 +113,7 @@ def factor_of_safety(
                 hi_an,
                 _DEFINITION,
             )
-        a = analyse(system, strength_factor=F, start=start)
+        a = analyse(system, strength_factor=F, start=start, prove_first=False)
         record(F, a)
         if a.stable:
             lo_an = a
