@@ -24,7 +24,7 @@ from .sections import (
 )
 from .settings import AnalysisSpec, StabilisationSpec
 from .study import StudySpec
-from .values import _Section, document_fields
+from .values import _Section
 
 #: Version of the file format this module reads (the ``format`` key).
 FORMAT_VERSION = 1
@@ -113,7 +113,6 @@ class ModelFile(_Section):
 
 def json_schema() -> dict:
     """The JSON Schema of the model file (for editors), generated from :class:`ModelFile`."""
-    document_fields()
     schema = ModelFile.model_json_schema()
     schema["$schema"] = "https://json-schema.org/draft/2020-12/schema"
     schema["$id"] = "https://rockdem.invalid/schema/rockdem-model.schema.json"

@@ -14,7 +14,6 @@ from pydantic.fields import FieldInfo
 
 from .errors import Loc, ModelFileError, _keypath, _kind, _line
 from .spec import ModelFile
-from .values import document_fields
 
 
 def validate_document(data: dict, *, source: str = "<string>", nodes: Any = None) -> ModelFile:
@@ -134,7 +133,6 @@ def _range(loc: Loc, kind: str, bound: Any) -> str:
 def _field_doc(loc: Loc) -> str:
     parent = _type_at(loc[:-1])
     if isinstance(parent, type) and issubclass(parent, BaseModel):
-        document_fields()
         field = parent.model_fields.get(str(loc[-1]))
         if field is not None and field.description:
             # its first sentence (a period then a space or the end: not the

@@ -14,11 +14,7 @@ runs for ever.
 
 from __future__ import annotations
 
-import ast
-import inspect
-import itertools
 import re
-import sys
 from typing import Annotated, Any
 
 from pydantic import BaseModel, BeforeValidator, ConfigDict, Field
@@ -159,68 +155,6 @@ Direction = bounded(-360.0, 360.0)
 
 
 class _Section(BaseModel):
-    """Base of every section: unknown keys are errors, every key documented
-    (the docstring under each field: :func:`document_fields`)."""
+    """Base of every section: unknown keys are errors, every key documented."""
 
-    model_config = ConfigDict(extra="forbid", defer_build=True)
-
-
-def _sections(cls: type = _Section) -> list[type]:
-    """Every subclass of ``cls``, depth first."""
-    out = []
-    for sub in cls.__subclasses__():
-        out += [sub, *_sections(sub)]
-    return out
-
-
-def _attribute_docs(module) -> dict[str, dict[str, str]]:
-    """``{class name: {field: the string under its annotation}}`` in a module's source."""
-    try:
-        tree = ast.parse(inspect.getsource(module))
-    except (OSError, TypeError, SyntaxError):  # no source (frozen, zipped): no docs
-        return {}
-    docs: dict[str, dict[str, str]] = {}
-    for node in ast.walk(tree):
-        if not isinstance(node, ast.ClassDef):
-            continue
-        found = docs.setdefault(node.name, {})
-        for stmt, after in itertools.pairwise(node.body):
-            if (
-                isinstance(stmt, ast.AnnAssign)
-                and isinstance(stmt.target, ast.Name)
-                and isinstance(after, ast.Expr)
-                and isinstance(after.value, ast.Constant)
-                and isinstance(after.value.value, str)
-            ):
-                found[stmt.target.id] = inspect.cleandoc(after.value.value)
-    return docs
-
-
-_DOCUMENTED: set[type] = set()
-
-
-def document_fields() -> None:
-    """Give every field of every section the docstring written under it, once.
-
-    What pydantic's ``use_attribute_docstrings`` does, but on demand (for an
-    error message or the JSON schema) instead of at class creation, where on
-    Python < 3.13 it walked the call stack for each of the ~30 sections:
-    80 ms of every start of the command line.
-    """
-    todo = [cls for cls in _sections() if cls not in _DOCUMENTED]
-    if not todo:
-        return
-    by_module: dict[str, dict[str, dict[str, str]]] = {}
-    for cls in todo:
-        docs: dict[str, str] = {}
-        for base in reversed(cls.__mro__):  # a subclass's docs over its bases'
-            if isinstance(base, type) and issubclass(base, _Section):
-                if base.__module__ not in by_module:
-                    by_module[base.__module__] = _attribute_docs(sys.modules[base.__module__])
-                docs.update(by_module[base.__module__].get(base.__name__, {}))
-        for name, field in cls.model_fields.items():
-            if field.description is None and name in docs:
-                field.description = docs[name]
-        _DOCUMENTED.add(cls)
-    for cls in todo:
-        cls.model_rebuild(force=True)
+    model_config = ConfigDict(extra="forbid", use_attribute_docstrings=True, defer_build=True)
