@@ -133,7 +133,8 @@ def _root(
             min=1,
             envvar="ROCKDEM_MAX_BLOCKS",
             help="Refuse models of more blocks than this (a generated slope by its "
-            "estimated size, before it is built). Each 100,000 blocks need about 2.5 GB.",
+            "estimated size, before it is built). A factor of safety on 94,533 blocks "
+            "peaked at 5.4 GB.",
             metavar="N",
         ),
     ] = MAX_BLOCKS,
