@@ -65,8 +65,18 @@ def test_wedge_verdict_and_factor_of_safety_match_the_closed_form(name):
 
 
 def test_the_readme_command_stays_unstable():
+    """What the README's opening paragraph says of `rockdem run --example
+    wedge-verification`: unstable, proven by the equilibrium LP, both blocks
+    slide, all three joints have failed in shear."""
+    from rockdem.modes import failure_modes
+
     model, _ = load("wedge-verification")
-    assert not rd.analyse(model).stable
+    a = rd.analyse(model)
+    assert not a.stable and a.verdict == "unstable"
+    assert a.evidence.proof == "lp-certificate"
+    assert "the equilibrium LP proves that none exists" in a.evidence.reason
+    assert sorted(failure_modes(a).blocks("slides").tolist()) == [1, 2]
+    assert list(a.interfaces.state_name) == ["shear"] * 3
 
 
 # ------------------------------------------------------------------ 6.1
