@@ -267,6 +267,18 @@ def test_fos_human_output():
     assert ends[0] != ends[1] and float(ends[0]) < float(ends[1])
 
 
+def test_fos_names_the_blocks_at_the_transition_between_sliding_and_toppling():
+    """The toppling example (Goodman & Bray's columns): column 7 stood at the
+    limit on a base 1/6 open and 2/3 at its strength; its mode is the
+    motion's, and the output says so instead of presenting it as decided."""
+    r = invoke("fos", "-e", "toppling")
+    assert r.exit_code == 0
+    line = next(t for t in r.stdout.splitlines() if "at the transition" in t)
+    assert "(1): 7 " in line and "chaotic" in line
+    data = json.loads(invoke("fos", "-e", "toppling", "--json").stdout)
+    assert data["failure_modes_from_motion"] == [7]
+
+
 def test_fos_states_where_a_confirmed_failure_is_confirmed():
     """The toppling example's failure is confirmed by dynamic relaxation 2%
     beyond the bracket, not proven: the JSON gives that factor, and the text

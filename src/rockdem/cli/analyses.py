@@ -270,6 +270,14 @@ def _print_mechanism(doc: dict[str, Any]) -> None:
         out.print("  failure modes:")
         for mode, ids in modes.items():
             out.print(f"    {mode} ({len(ids)}): {_ids(ids, 20)}")
+    guessed = doc.get("failure_modes_from_motion") or []
+    moving = sum(len(ids) for ids in modes.values())
+    if guessed and len(guessed) < moving:  # some at the transition: say which
+        out.print(
+            f"  at the transition between sliding and toppling ({len(guessed)}): "
+            f"{_ids(guessed, 20)} (their base was partly open and partly at its strength at "
+            "the limit; their mode is the motion's beyond it, which is chaotic in its detail)"
+        )
     for text in doc.get("warnings") or []:
         out.print(f"[bold yellow]warning[/bold yellow]: {escape(text)}")
 
