@@ -277,6 +277,15 @@ def test_fos_names_the_blocks_at_the_transition_between_sliding_and_toppling():
     assert "(1): 7 " in line and "chaotic" in line
     data = json.loads(invoke("fos", "-e", "toppling", "--json").stdout)
     assert data["failure_modes_from_motion"] == [7]
+    # ... and the report's "how far to trust this"
+    from rockdem.config import load_model
+    from rockdem.examples import example_path
+    from rockdem.trust import trust_statements
+
+    model, _ = load_model(example_path("toppling"))
+    fos = rockdem.factor_of_safety(model)
+    said = [t for t in trust_statements(fos.stable_analysis, fos) if "between sliding" in t]
+    assert len(said) == 1 and said[0].startswith("Block(s) 7 stood at the limit")
 
 
 def test_fos_states_where_a_confirmed_failure_is_confirmed():

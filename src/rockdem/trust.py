@@ -60,6 +60,20 @@ def trust_statements(a: Analysis, fos: FactorOfSafety | None = None) -> list[str
                 )
         if ev.certificate:
             out.append(f"{ev.certificate[0].upper()}{ev.certificate[1:]}.")
+        if failed.limit_interfaces is not None:
+            from .modes import failure_modes
+
+            modes = failure_modes(failed)
+            guessed = modes.ids[(modes.code > 0) & ~modes.decided]
+            if 0 < guessed.size < int((modes.code > 0).sum()):
+                ids = ", ".join(str(i) for i in guessed[:20]) + (
+                    ", ..." if guessed.size > 20 else ""
+                )
+                out.append(
+                    f"Block(s) {ids} stood at the limit on a base partly open and partly at "
+                    "its strength, between sliding and toppling: the mode shown is that of "
+                    "the motion beyond the limit, which is chaotic in its detail."
+                )
         out.append(
             f"Newton: {ev.reason} after {ev.iterations} iterations "
             f"(last out-of-balance {ev.residuals[-1]:.1e} of the loads)."
