@@ -18,11 +18,13 @@ The base is the contact the loads press the group onto (its outward normal
 has the largest component along the resultant load on the group).  These are
 the kinematic modes of a block on a plane in Goodman & Bray (1976) and
 Wyllie & Mah (2004, ch. 9), read here from the computed motion, not from
-the geometry.  Where the analysis is the failed end of a factor-of-safety
-search, the base as it stood at the last equilibrium before the limit
-(``Analysis.limit_interfaces``) decides between sliding and toppling: the
+the geometry.  Where the analysis knows its last equilibrium before the
+limit (``Analysis.limit_interfaces``: the failed end of a factor-of-safety
+search, a load step after the first), each block's base as it stood there
+decides between sliding and toppling wherever it slid or lifted: the
 motion is that of a run a little beyond the limit, where toppling columns'
-toe corners also slip a little (see :func:`_at_the_limit`).
+toe corners also slip a little and the detail is chaotic (see
+:func:`_at_the_limit`; ``BlockModes.decided`` says which blocks).
 
 :func:`boundary_contacts` finds where the moving blocks touch a fixed block
 that backs the model's outer boundary (the back, the base or the front of
@@ -267,10 +269,10 @@ def _at_the_limit(code, pivot, moving, faces, opening, load, limit, points):
     block, on the base it had at the limit: the contacts still closed there
     that its own load presses it onto most (within :data:`MAIN_BASE_COS`).
     Closed and at its strength (all along it, all but one spring point),
-    the block slides; open over half its length
-    with the closed part below its strength, it topples, as Goodman & Bray's
-    limit equilibrium classes the blocks; open over half its length with
-    the closed part at its strength, it slides and topples.  Other blocks
+    the block slides; open over half its length with the closed part below
+    its strength, it topples, as Goodman & Bray's limit equilibrium classes
+    the blocks; open over half its length with the closed part at its
+    strength, it slides and topples.  Other blocks
     keep the mode of their group's motion (``decided`` False): with no
     closed base there, or a base partly open and partly at its strength (a
     block at the transition: Goodman & Bray's staircase on one trial
