@@ -542,6 +542,8 @@ def test_a_failure_under_gravity_is_proven_before_the_homotopy():
     assert not fast.stable and fast.verdict == "unstable"
     assert fast.evidence.proof == slow.evidence.proof == "lp-certificate"
     assert "the equilibrium LP proves that none exists" in fast.evidence.reason
+    # cohesionless: the strengths scale with the loads, so no share of them is carried
+    assert "forces carry none of the loads" in fast.evidence.certificate
     assert fast.evidence.reached is None and fast.unloaded_limit is None
     assert fast.stress_factor == 1.0 and slow.stress_factor < 0.74
     assert sorted(fast.unstable_blocks) == sorted(slow.unstable_blocks)

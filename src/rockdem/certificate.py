@@ -58,10 +58,17 @@ class Certificate:
     def __str__(self) -> str:
         if self.mu is None:
             return f"equilibrium LP: no answer ({self.status})"
+        carried = (
+            "none of the loads (no multiple of them, however small)"
+            if self.mu == 0
+            else f"at most {self.mu:.4g} times the loads"
+        )
         head = (
             f"equilibrium LP at F = {self.strength_factor:.6g}: statically admissible forces "
-            f"carry at most {self.mu:.4g} times the loads"
+            f"carry {carried}"
         )
+        if self.proves_failure and self.mu == 0:
+            return head
         if self.proves_failure:
             return f"{head}, less than the {self.load_factor:.4g} applied"
         return f"{head} ({self.load_factor:.4g} applied: an admissible force field exists)"
