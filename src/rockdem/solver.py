@@ -40,7 +40,7 @@ from .interfaces import Interfaces, assign_joints, check_held, find_interfaces
 from .linalg import Factorizer, factorize, norm
 from .loads import block_loads, check_water_table, joint_water, water_loads
 from .model import Model
-from .spring_law import Response, evaluate
+from .spring_law import Response, evaluate, strength
 from .springs import Springs, place_springs
 
 log = logging.getLogger(__name__)
@@ -171,11 +171,13 @@ class Solve:
     relaxation: str | None = None
 
 
-def residual(system: System, q, state, load_factor, factor):
-    """Response and out-of-balance force at displacements q."""
+def residual(system: System, q, state, load_factor, factor, strengths=None):
+    """Response and out-of-balance force at displacements q (``strengths``:
+    :func:`rockdem.spring_law.strength` of this state and factor, if known)."""
     asm = system.assembly
     dn, ds = asm.relative_displacement(q)
-    resp = evaluate(system.springs, state, dn, ds, factor, system.model.settings.reduce_tensile)
+    reduce = system.model.settings.reduce_tensile
+    resp = evaluate(system.springs, state, dn, ds, factor, reduce, strengths)
     r = load_factor * system.f_ext - asm.internal_force(resp.force)
     if system.bolts is not None:
         r -= system.bolts.internal_force(q)
@@ -261,7 +263,9 @@ def newton(system, state, load_factor, factor, q, max_it):
     scale = asm.dof_scale
     tol = system.model.settings.tolerance
     f_norm = norm(load_factor * system.f_ext * scale)
-    resp, r = residual(system, q, state, load_factor, factor)
+    # the strengths of this state and factor, for every residual of the solve
+    strengths = strength(system.springs, state, factor, system.model.settings.reduce_tensile)
+    resp, r = residual(system, q, state, load_factor, factor, strengths)
     merit = norm(r * scale) / f_norm
     history = [merit]
     beta = BETA_START
@@ -291,7 +295,7 @@ def newton(system, state, load_factor, factor, q, max_it):
         alpha, accepted = 1.0, False
         for _ in range(LINE_SEARCH_HALVINGS):
             q_try = q + alpha * step
-            resp_try, r_try = residual(system, q_try, state, load_factor, factor)
+            resp_try, r_try = residual(system, q_try, state, load_factor, factor, strengths)
             merit_try = norm(r_try * scale) / f_norm
             if merit_try <= (1.0 - 1e-4 * alpha) * merit:
                 accepted = True

@@ -111,6 +111,7 @@ def evaluate(
     ds: np.ndarray,
     factor: float = 1.0,
     reduce_tensile: bool = True,
+    strengths: tuple | None = None,
 ) -> Response:
     """Stresses and consistent tangent at relative displacements ``(dn, ds)``.
 
@@ -118,8 +119,12 @@ def evaluate(
     strength, so the residual stays continuous; the brittle drop to zero
     happens when the state is committed (:func:`commit` marks the point
     broken and the load is solved again: the redistribution of the excess).
+    ``strengths``: :func:`strength`'s result for these arguments, where the
+    caller evaluates one state many times (a Newton solve).
     """
-    c, tan_phi, tensile = strength(springs, state, factor, reduce_tensile)
+    if strengths is None:
+        strengths = strength(springs, state, factor, reduce_tensile)
+    c, tan_phi, tensile = strengths
     kn, ks = springs.kn, springs.ks
     pull, sigma, raw_cap, tau_trial = trial_stresses(
         springs, state.slip, (c, tan_phi, tensile), dn, ds
