@@ -123,7 +123,7 @@ import rockdem as rd
 from rockdem import verification as V
 system = rd.build_system(V.brick_slope(1000))
 a = rd.analyse(system)
-print(hashlib.sha1(system.lu0.solve(system.f_ext).tobytes() + a.displacement.tobytes()).hexdigest())
+print(hashlib.sha1(system.u_elastic.tobytes() + a.displacement.tobytes()).hexdigest())
 """
 
 

@@ -81,7 +81,7 @@ def _release(system, state, load_factor, factor, max_it, resume=None, proven=Non
     """
     asm = system.assembly
     springs = system.springs
-    u = system.lu0.solve(load_factor * system.f_ext)
+    u = load_factor * system.u_elastic  # (linear: the elastic solution at this load)
     dn, ds = asm.relative_displacement(u)
     ref = float(max(np.max(np.abs(springs.kn * dn)), np.max(np.abs(springs.ks * ds)), 1e-300))
     q = np.zeros(asm.n_dof)

@@ -187,11 +187,6 @@ class Factorizer:
                 pass
 
 
-def factorize(A):
-    """One-off factorisation (own handle): an object with ``solve(b)``."""
-    return Factorizer().factorize(A)
-
-
 def norm(x: np.ndarray) -> float:
     """Euclidean norm without BLAS: ``np.linalg.norm`` goes through a threaded
     BLAS dot that costs ~1.5 ms on 30,000 entries (10 ms on a busy machine,

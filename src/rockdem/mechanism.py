@@ -15,7 +15,6 @@ import numpy as np
 from scipy.sparse import coo_array
 from scipy.sparse.csgraph import connected_components
 
-from .linalg import factorize
 from .results import Analysis
 from .solver import Solve, System, residual, tangent
 
@@ -42,7 +41,7 @@ def newton_mechanism(system: System, sol: Solve, state, load_factor, factor):
     resp, r = residual(system, sol.q, state, load_factor, factor)
     J = tangent(system, resp, sol.q, 1e-6)
     try:
-        d = factorize(J).solve(r)
+        d = system.factorizer.factorize(J).solve(r)  # (the pattern analysed once)
     except RuntimeError:
         d = sol.direction
     if np.dot(d, system.f_ext) < 0:  # the loads do positive work on the mechanism

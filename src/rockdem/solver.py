@@ -37,7 +37,7 @@ from .blocks import Blocks
 from .bolts import Crossings, place_bolts
 from .errors import InputError
 from .interfaces import Interfaces, assign_joints, check_held, find_interfaces
-from .linalg import Factorizer, factorize, norm
+from .linalg import Factorizer, norm
 from .loads import block_loads, check_water_table, joint_water, water_loads
 from .model import Model
 from .spring_law import Response, evaluate, strength
@@ -83,7 +83,10 @@ class System:
     f_block: np.ndarray  # (n_blocks, 3) external loads at full load factor
     f_ext: np.ndarray  # (n_dof,)
     elastic_scale: float  # scaled size of the elastic displacement under f_ext
-    lu0: object = field(default=None)
+    #: the elastic displacements under f_ext (the stiffness K0 is factorised once,
+    #: by ``factorizer``, and its factor not kept: 94,533 blocks held a second
+    #: PARDISO handle and factor for the whole analysis)
+    u_elastic: np.ndarray | None = None
     #: one factorisation handle for all tangents (symbolic analysis reused)
     factorizer: Factorizer = field(default_factory=Factorizer)
     #: bolt and cable crossings of the joints (rockdem.bolts), None without bolts
@@ -133,11 +136,12 @@ def build_system(model: Model, f_block: np.ndarray | None = None) -> System:
             "nothing to analyse",
             "give the blocks a unit weight, or apply a load",
         )
-    lu0 = None
+    u_elastic = None
     elastic = 1.0
+    factorizer = Factorizer()  # K0 has the tangents' pattern: analysed once for all
     if asm.n_dof:
         try:
-            lu0 = factorize(K0)
+            u_elastic = factorizer.factorize(K0).solve(f_ext)
         except RuntimeError as exc:
             check_held(blocks, faces)  # a group of blocks nothing holds: name it
             raise InputError(
@@ -146,9 +150,21 @@ def build_system(model: Model, f_block: np.ndarray | None = None) -> System:
                 f"rotation ({s.points_per_interface}-point {s.quadrature} rule)",
                 "use 2 or more spring points per interface",
             ) from exc
-        u = lu0.solve(f_ext)
-        elastic = float(np.max(np.abs(u / asm.dof_scale))) or 1.0
-    return System(model, blocks, faces, springs, asm, K0, f_block, f_ext, elastic, lu0, bolts=bolts)
+        elastic = float(np.max(np.abs(u_elastic / asm.dof_scale))) or 1.0
+    return System(
+        model,
+        blocks,
+        faces,
+        springs,
+        asm,
+        K0,
+        f_block,
+        f_ext,
+        elastic,
+        u_elastic,
+        factorizer=factorizer,
+        bolts=bolts,
+    )
 
 
 @dataclass(frozen=True, eq=False)
