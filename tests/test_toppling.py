@@ -375,3 +375,32 @@ def test_steep_face_columns_mirrored_or_ten_times_larger(face, flip, scale):
     joint = rd.Joint(normal_stiffness=1e5 / scale, friction_angle=30)
     fos = rd.factor_of_safety(rd.Model(blocks, joint, settings=model.settings))
     assert fos.value == pytest.approx(le, rel=0.03)
+
+
+def test_a_failure_confirmed_below_the_bracket_top_ends_the_bracket():
+    """Goodman & Bray's staircase held at the toe by a 500 t/m strut parallel
+    to the treads (at mid-height of the toe block's lower face), width 0.002.
+    Dynamic relaxation, 2% beyond Newton's limit, neither settled nor moved;
+    at 5% it moved.  The search went on from the 2% run, and the restart's
+    own check found the blocks moving at that nearer factor: the bracket
+    must end there.  It ended at the 5% factor, FS 1.4953 in [1.4587,
+    1.5319], a value above a factor where failure was confirmed.  No trial
+    with a failure that is proven or confirmed at its own factor may lie
+    below the bracket's top."""
+    from rockdem.stabilisation.measures import with_support
+
+    p = np.radians(PSI)
+    toe_height = stepped_heights(16, 10, 5.0, 5.2, STEP)[0]
+    at = 0.5 * toe_height * np.array([np.sin(p), np.cos(p)])
+    model = with_support(staircase(), at, 180.0 - PSI, 500.0)
+    fos = rd.factor_of_safety(model, width=0.002)
+    lo, hi = fos.bracket
+    assert fos.proof in {"lp-certificate", "dynamic-relaxation"}
+    assert fos.confirmed_upper_bound is None or fos.confirmed_upper_bound <= hi
+    for trial in fos.trials:
+        if trial.stable:
+            assert trial.factor <= lo
+        elif trial.evidence.proof in {"lp-certificate", "dynamic-relaxation"}:
+            # a failure confirmed where the trial's own solve lost equilibrium
+            at_factor = trial.evidence.confirmed_at or trial.evidence.failed_at or trial.factor
+            assert at_factor >= hi * (1 - 1e-12), (trial, fos)

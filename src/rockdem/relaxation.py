@@ -323,7 +323,7 @@ def confirm_failed_analysis(system, failed, state, q, load_factor: float):
         system, state, load_factor, failed.strength_factor, q, extend=True, second_look=not proven
     )
     run = _go_on(system, state, load_factor, failed.strength_factor, run, MAX_STEPS, not proven)
-    return _with_relaxation(failed, f"{run} at load factor {load_factor:.4g}"), run
+    return with_relaxation(failed, f"{run} at load factor {load_factor:.4g}"), run
 
 
 def _go_on(system, state, load_factor, factor, run, steps, look):
@@ -391,14 +391,14 @@ def confirm_failed_trial(system, failed, base, factor: float, trials):
             break
     run = _go_on(system, state, base.load_factor, beyond, run, steps, look)
     text = f"{run} at F = {beyond:.6g} ({margin:.0%} beyond the bracket)"
-    failed = _with_relaxation(failed, text, beyond if run.status == "mechanism" else None)
+    failed = with_relaxation(failed, text, beyond if run.status == "mechanism" else None)
     trials = list(trials)
     last_failed = max(i for i, t in enumerate(trials) if not t.stable)
     trials[last_failed] = replace(trials[last_failed], evidence=failed.evidence)
     return failed, trials, run, beyond, first
 
 
-def _with_relaxation(failed, text: str, confirmed_at: float | None = None):
+def with_relaxation(failed, text: str, confirmed_at: float | None = None):
     """``failed`` (an Analysis) with ``text`` as its last step's relaxation
     evidence (and the strength factor where it confirmed a mechanism)."""
     last = failed.steps[-1]

@@ -19,7 +19,7 @@ from .analysis import _evidence, _package, _settle, analyse
 from .certificate import prove_failed_trial
 from .mechanism import relaxation_mechanism
 from .model import Model
-from .relaxation import CONFIRM_MARGINS, confirm_failed_trial
+from .relaxation import CONFIRM_MARGINS, confirm_failed_trial, with_relaxation
 from .results import Analysis, FactorOfSafety, Step, Trial
 from .solver import System, build_system
 
@@ -211,6 +211,14 @@ def factor_of_safety(
             if b.stable:
                 lo_an, hi_an, hi_F = b, None, np.inf
                 continue
+            if moved_at is not None and b.evidence.proof == "dynamic-relaxation":
+                # the restart's own check left the blocks moving at the nearer
+                # margin: failure is confirmed there, not only at the farther one
+                # (a toppling staircase with a toe strut: bracket [1.4587, 1.5319]
+                # reported while the blocks moved at 1.4881)
+                text = f"{b.evidence.relaxation} at F = {beyond:.6g}, from where the run stopped"
+                hi_an = with_relaxation(hi_an, text, beyond)
+                moved_at = beyond
         hi_an = relaxation_mechanism(system, hi_an, shown)
         hi = moved_at if moved_at is not None else hi
         break
