@@ -97,3 +97,24 @@ def test_python_api_names_the_blocks_nothing_holds():
     model = rd.Model(blocks, rd.Joint(normal_stiffness=1e6, friction_angle=30))
     with pytest.raises(rd.InputError, match=r"blocks 0, 1.*held by nothing.*fixed"):
         rd.analyse(model)
+
+
+@pytest.mark.parametrize(
+    "settings,where",
+    [
+        (dict(points_per_interface=9), "settings points_per_interface"),
+        (dict(quadrature="gauss", points_per_interface=0), "settings points_per_interface"),
+        (dict(points_per_interface=2.5), "settings points_per_interface"),
+        (dict(quadrature="simpson"), "settings quadrature"),
+        (dict(tolerance="1e-8"), "settings tolerance"),
+        (dict(reduce_tensile="yes"), "settings reduce_tensile"),
+    ],
+)
+def test_bad_settings_are_refused_where_they_are_made(settings, where):
+    """Settings(points_per_interface=9) was accepted and failed only when the
+    system was built, as 'quadrature: lobatto with 9 points', which does not
+    name the setting."""
+    with pytest.raises(rd.InputError) as err:
+        rd.Settings(**settings)
+    assert str(err.value).startswith(where)
+    assert err.value.fix

@@ -17,6 +17,7 @@ from .blocks import Blocks
 from .bolts import Bolt
 from .errors import InputError
 from .joints import Joint
+from .springs import POINTS_RANGE
 
 
 @dataclass(frozen=True)
@@ -190,7 +191,34 @@ class Settings:
                 )
             if not 1 <= value <= top:
                 raise InputError(f"settings {key}", f"{value} is out of range", f"use 1 to {top}")
+        if self.quadrature not in POINTS_RANGE:
+            raise InputError(
+                "settings quadrature",
+                f"unknown rule {self.quadrature!r}",
+                f"use one of {', '.join(POINTS_RANGE)}",
+            )
+        n, (fewest, most) = self.points_per_interface, POINTS_RANGE[self.quadrature]
+        if isinstance(n, bool) or not isinstance(n, int | np.integer) or not fewest <= n <= most:
+            raise InputError(
+                "settings points_per_interface",
+                f"{n!r} is not offered by the {self.quadrature} rule",
+                f"use {fewest} to {most}",
+            )
+        if not isinstance(self.reduce_tensile, bool | np.bool_):
+            raise InputError(
+                "settings reduce_tensile",
+                f"{self.reduce_tensile!r} is not true or false",
+                "use True or False",
+            )
         lo, hi = TOLERANCE_RANGE
+        if not isinstance(self.tolerance, int | float | np.floating) or isinstance(
+            self.tolerance, bool
+        ):
+            raise InputError(
+                "settings tolerance",
+                f"{self.tolerance!r} is not a number",
+                f"use {lo:g} to < {hi:g}",
+            )
         if not lo <= self.tolerance < hi:
             raise InputError(
                 "settings tolerance", f"{self.tolerance} is out of range", f"use {lo:g} to < {hi:g}"

@@ -17,6 +17,8 @@ from .interfaces import Interfaces
 from .joints import Joint
 
 QUADRATURES = ("lobatto", "gauss")
+#: spring points per interface each rule offers (fewest, most)
+POINTS_RANGE = {"lobatto": (2, 5), "gauss": (1, 10)}
 
 
 def quadrature(rule: str = "lobatto", n_points: int = 3) -> tuple[np.ndarray, np.ndarray]:
