@@ -776,3 +776,30 @@ def test_an_unchecked_stall_on_a_large_model_is_stated(monkeypatch):
     n = fos.stable_analysis.system.assembly.n_dof
     assert said(confirmed) and f"({n:,} unknowns)" in said(confirmed)[0]
     assert said(fos) == []  # proven by the LP: nothing to check
+
+
+def test_trust_names_bond_lost_at_spring_points_that_opened():
+    """A block on a 30 degree plane, c = 5, kh = 0.1 and kv = 0.05 (Hoek &
+    Bray's pseudo-static sliding block): the resultant falls outside the
+    middle third of the base, the heel spring point opens and loses its
+    cohesion over its whole share of the base, so the factor depends on the
+    number of spring points (limit equilibrium with the base closed: 1.31).
+    The report says so; with the tensile strength kept (nothing opens) it
+    does not."""
+    from rockdem.trust import trust_statements
+    from rockdem.verification import block_on_plane
+
+    def statements(tensile):
+        joint = rd.Joint(
+            normal_stiffness=1e6, friction_angle=35, cohesion=5, tensile_strength=tensile
+        ).ductile
+        model = block_on_plane(
+            30, joint, width=2.0, height=2.0, unit_weight=25,
+            loads=rd.Loads(seismic_h=0.1, seismic_v=0.05),
+        )  # fmt: skip
+        fos = rd.factor_of_safety(model, width=0.002)
+        return [t for t in trust_statements(fos.stable_analysis, fos) if "bond" in t]
+
+    opened = statements(0.0)
+    assert len(opened) == 1 and "3 lobatto points" in opened[0]
+    assert statements(1e4) == []
