@@ -83,9 +83,8 @@ class System:
     f_block: np.ndarray  # (n_blocks, 3) external loads at full load factor
     f_ext: np.ndarray  # (n_dof,)
     elastic_scale: float  # scaled size of the elastic displacement under f_ext
-    #: the elastic displacements under f_ext (the stiffness K0 is factorised once,
-    #: by ``factorizer``, and its factor not kept: 94,533 blocks held a second
-    #: PARDISO handle and factor for the whole analysis)
+    #: the elastic displacements under f_ext (K0's factor is not kept: on
+    #: 94,533 blocks it held a second PARDISO handle for the whole analysis)
     u_elastic: np.ndarray | None = None
     #: one factorisation handle for all tangents (symbolic analysis reused)
     factorizer: Factorizer = field(default_factory=Factorizer)
@@ -138,10 +137,13 @@ def build_system(model: Model, f_block: np.ndarray | None = None) -> System:
         )
     u_elastic = None
     elastic = 1.0
-    factorizer = Factorizer()  # K0 has the tangents' pattern: analysed once for all
     if asm.n_dof:
         try:
-            u_elastic = factorizer.factorize(K0).solve(f_ext)
+            # a handle of its own, freed here: the tangents' handle analyses the
+            # pattern with the first tangent's values (PARDISO's matching and
+            # scaling depend on them: analysed with K0's, the paths of chaotic
+            # searches changed in their last bits)
+            u_elastic = Factorizer().factorize(K0).solve(f_ext)
         except RuntimeError as exc:
             check_held(blocks, faces)  # a group of blocks nothing holds: name it
             raise InputError(
@@ -162,7 +164,6 @@ def build_system(model: Model, f_block: np.ndarray | None = None) -> System:
         f_ext,
         elastic,
         u_elastic,
-        factorizer=factorizer,
         bolts=bolts,
     )
 
