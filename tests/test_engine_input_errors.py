@@ -118,3 +118,22 @@ def test_bad_settings_are_refused_where_they_are_made(settings, where):
         rd.Settings(**settings)
     assert str(err.value).startswith(where)
     assert err.value.fix
+
+
+def test_a_stiffness_contrast_the_solver_cannot_trust_is_refused():
+    """A ground joint 1e7 times stiffer than the rock joints (a fuzz case: the
+    bedded-slope example with its ground at 1e13) turned a stable slope,
+    FS 1.196, into 'unstable, confirmed'; the toppling example with its column
+    joints 100 times stiffer than the base read FS 0.30 instead of 0.73.
+    Contrasts beyond 100 are refused, naming both joints; 100 is accepted."""
+    rock = _joint(name="rock")
+    for ratio, refused in ((1e7, True), (101.0, True), (100.0, False)):
+        ground = _joint(name="ground", normal_stiffness=1e6 * ratio)
+        on_top = [(0, 1), (1, 1), (1, 2), (0, 2)]  # a rock joint between two blocks
+        model = rd.Model(_blocks(GROUND, BLOCK, on_top), [rock, ground], ground="ground")
+        if refused:
+            with pytest.raises(rd.InputError, match="times as stiff as joint 'rock'") as err:
+                rd.build_system(model)
+            assert str(err.value).startswith("joint 'ground'")
+        else:
+            assert rd.build_system(model).interfaces.n_interfaces > 0

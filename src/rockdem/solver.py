@@ -37,6 +37,7 @@ from .blocks import Blocks
 from .bolts import Crossings, place_bolts
 from .errors import InputError
 from .interfaces import Interfaces, assign_joints, check_held, find_interfaces
+from .joints import check_stiffness_contrast
 from .linalg import Factorizer, norm
 from .loads import block_loads, check_water_table, joint_water, water_loads
 from .model import Model
@@ -113,6 +114,7 @@ def build_system(model: Model, f_block: np.ndarray | None = None) -> System:
     # every free block must reach a fixed one (a factorisation of the singular
     # stiffness need not fail: SuperLU factorised 59 blocks and no ground)
     check_held(blocks, faces)
+    check_stiffness_contrast(model.joints, faces.joint)
     s = model.settings
     springs = place_springs(faces, model.joints, s.quadrature, s.points_per_interface)
     asm = build_assembly(blocks, faces, springs)
