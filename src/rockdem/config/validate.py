@@ -29,8 +29,34 @@ def validate_document(data: dict, *, source: str = "<string>", nodes: Any = None
     except ValidationError as exc:
         raise _from_validation(exc, source, nodes) from None
     _check_references(cfg, source, nodes)
+    _check_unique_names(cfg, source, nodes)
     _check_units(cfg, source, nodes)
     return cfg
+
+
+def _check_unique_names(cfg: ModelFile, source: str, nodes: Any) -> None:
+    """Bolts, stabilisation trials and stages are reported by name: two of one
+    name would be one row (found by fuzzing: two bolts named B1 were merged in
+    the results).  Empty names are not compared (an unnamed bolt is named by its
+    position)."""
+    lists: list[tuple[Loc, list, str]] = [
+        (("bolts",), cfg.bolts, "bolt"),
+        (("stabilisation", "trials"), cfg.stabilisation.trials, "trial"),
+        (("stabilisation", "stages"), cfg.stabilisation.stages, "stage"),
+    ]
+    for where, items, label in lists:
+        first: dict[str, int] = {}
+        for i, item in enumerate(items):
+            if not item.name:
+                continue
+            if item.name in first:
+                loc: Loc = (*where, i, "name")
+                problem = (
+                    f"{item.name!r} is already the name of {_keypath((*where, first[item.name]))}"
+                )
+                fix = f"give each {label} its own name"
+                raise ModelFileError(source, _keypath(loc), problem, fix, _line(nodes, loc))
+            first[item.name] = i
 
 
 def _check_units(cfg: ModelFile, source: str, nodes: Any) -> None:
