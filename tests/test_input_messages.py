@@ -64,3 +64,27 @@ def test_two_designs_of_one_name_are_refused(section, label, line):
         f"m.yaml:{line}: stabilisation.{section}[1].name: 'A' is already the name of "
         f"stabilisation.{section}[0]; give each {label} its own name"
     )
+
+
+# ------------------------------------------------------ a misspelt required key
+@pytest.mark.parametrize(
+    ("typo", "meant"),
+    [
+        ("friction_angel", "friction_angle"),
+        ("normal_stiffnes", "normal_stiffness"),
+        ("friction_angIe", "friction_angle"),  # a capital I for an l
+    ],
+)
+def test_a_misspelt_required_key_is_named_before_the_missing_one(typo, meant):
+    """Found by fuzzing: `friction_angel: 30` was reported only as
+    "friction_angle: required key is missing", which hides the typo."""
+    text = BOX.replace(meant, typo, 1)
+    assert _refused(text) == (
+        f"m.yaml:4: joints.bedding.{typo}: unknown key; did you mean `{meant}`? "
+        "(1 more problem in the file)"
+    )
+
+
+def test_a_missing_key_without_a_typo_is_still_named():
+    text = BOX.replace("friction_angle: 30", "cohesion: 1", 1)
+    assert "joints.bedding.friction_angle: required key is missing" in _refused(text)

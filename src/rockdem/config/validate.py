@@ -262,8 +262,17 @@ def _short(value: Any) -> str:
 
 def _from_validation(exc: ValidationError, source: str, nodes: Any) -> ModelFileError:
     errors = exc.errors(include_url=False)
-    # report the most specific error first (deepest key path)
-    errors.sort(key=lambda e: -len(e["loc"]))
+    # report the most specific error first (deepest key path), and an unknown key
+    # before a key missing from the same mapping: it is likely the missing one
+    # misspelt (found by fuzzing: `friction_angel: 30` was reported only as
+    # "friction_angle: required key is missing")
+    missing_from = {e["loc"][:-1] for e in errors if e["type"] == "missing"}
+    errors.sort(
+        key=lambda e: (
+            -len(e["loc"]),
+            not (e["type"] == "extra_forbidden" and e["loc"][:-1] in missing_from),
+        )
+    )
     err = errors[0]
     loc, problem, fix = _describe(err)
     # the same problem reported twice (both coordinates of a short point) is one
