@@ -12,7 +12,8 @@ from __future__ import annotations
 import pytest
 
 from _models import BOX, SLOPE
-from rockdem.config import ModelFileError, parse_model
+from rockdem.config import ModelFileError, parse_document, parse_model
+from rockdem.config import parse as parse_module
 
 
 def _refused(text: str) -> str:
@@ -88,3 +89,27 @@ def test_a_misspelt_required_key_is_named_before_the_missing_one(typo, meant):
 def test_a_missing_key_without_a_typo_is_still_named():
     text = BOX.replace("friction_angle: 30", "cohesion: 1", 1)
     assert "joints.bedding.friction_angle: required key is missing" in _refused(text)
+
+
+# ------------------------------------------------------------ too many values
+def test_too_many_values_without_aliases_names_the_key(monkeypatch):
+    """Found by fuzzing: a water table of 1.5 million points (no aliases at all)
+    was blamed on "aliases that multiply (an alias bomb)"."""
+    monkeypatch.setattr(parse_module, "MAX_NODES", 1000)
+    points = ", ".join(f"[{i}, 1]" for i in range(400))
+    text = BOX + f"loads:\n  water_unit_weight: 9.81\n  water_table: [{points}]\n"
+    with pytest.raises(ModelFileError) as info:
+        parse_document(text, source="m.yaml")
+    message = str(info.value)
+    assert message.startswith("m.yaml:11: loads.water_table: holds more than 1,000 values")
+    assert "alias" not in message
+
+
+def test_too_many_values_from_aliases_is_still_an_alias_bomb(monkeypatch):
+    monkeypatch.setattr(parse_module, "MAX_NODES", 1000)
+    lines = ["a0: &a0 [x, x, x, x, x, x, x, x, x]"]
+    lines += [f"a{i}: &a{i} [{', '.join([f'*a{i - 1}'] * 9)}]" for i in range(1, 5)]
+    with pytest.raises(ModelFileError) as info:
+        parse_document(BOX + "\n".join(lines) + "\n", source="m.yaml")
+    assert "once its aliases are expanded" in str(info.value)
+    assert "alias bomb" in str(info.value)
