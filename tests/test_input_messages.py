@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import pytest
 
+from _cli import assert_refused
 from _models import BOX, SLOPE
 from rockdem.config import ModelFileError, parse_document, parse_model
 from rockdem.config import parse as parse_module
@@ -113,3 +114,67 @@ def test_too_many_values_from_aliases_is_still_an_alias_bomb(monkeypatch):
         parse_document(BOX + "\n".join(lines) + "\n", source="m.yaml")
     assert "once its aliases are expanded" in str(info.value)
     assert "alias bomb" in str(info.value)
+
+
+# ------------------------------------------------------- a corner-only contact
+CORNER = """units: kN, m, kPa
+materials: {rock: {unit_weight: 25}}
+joints:
+  j: {normal_stiffness: 1.0e+6, friction_angle: 30}
+blocks:
+  - {fixed: true, vertices: [[-5, -1], [5, -1], [5, 0], [-5, 0]]}
+  - {material: rock, vertices: [[0, 0], [1, 0], [1, 1], [0, 1]]}
+  - {material: rock, vertices: [[1, 1], [2, 1], [2, 2], [1, 2]]}
+"""
+
+DIAMOND = """units: kN, m, kPa
+materials: {rock: {unit_weight: 25}}
+joints:
+  j: {normal_stiffness: 1.0e+6, friction_angle: 30}
+blocks:
+  - {fixed: true, vertices: [[-5, -1], [5, -1], [5, 0], [-5, 0]]}
+  - {material: rock, vertices: [[0, 0], [1, 1], [0, 2], [-1, 1]]}
+"""
+
+
+@pytest.mark.parametrize(
+    ("text", "expected"),
+    [
+        (CORNER, "m.yaml:8: blocks[2]: block 2 touches block 1 only at the point (1, 1)"),
+        (DIAMOND, "m.yaml:7: blocks[1]: block 1 touches block 0 only at the point (0, 0)"),
+        (  # a corner within the tolerance of the other block's corner
+            CORNER.replace("[[1, 1], [2, 1]", "[[1, 1.00000000001], [2, 1]"),
+            "blocks[2]: block 2 touches block 1 only at the point (1, 1)",
+        ),
+    ],
+)
+def test_a_block_touching_only_at_a_corner_is_named_so(text, expected):
+    """Found by fuzzing: a block standing on another's corner was said to
+    overlap it "by a sliver deeper than the model's geometric tolerance"."""
+    message = _refused(text)
+    assert expected in message and "blocks must share an edge" in message
+    assert "sliver" not in message and "overlaps" not in message
+
+
+@pytest.mark.parametrize(
+    ("base", "expected"),
+    [
+        ("[[0, -1e-6], [1, -1e-6]", "it overlaps block 0 by a sliver deeper than"),
+        ("[[0, 1e-5], [1, 1e-5]", "it misses block 0 by 1e-05, more than"),
+    ],
+)
+def test_a_block_along_the_ground_but_off_it_is_still_named_so(base, expected):
+    """The messages a corner contact was confused with stay for what they
+    describe: a block sunk into the ground, or one floating just above it."""
+    text = DIAMOND.replace("[[0, 0], [1, 1], [0, 2], [-1, 1]]", base + ", [1, 1], [0, 1]]")
+    assert f"blocks[1]: block 1 shares no edge with another block: {expected}" in _refused(text)
+
+
+def test_a_corner_contact_is_one_line_and_exit_2(tmp_path):
+    from typer.testing import CliRunner
+
+    from rockdem.cli import app
+
+    (tmp_path / "m.yaml").write_text(CORNER)
+    r = CliRunner().invoke(app, ["check", str(tmp_path / "m.yaml")])
+    assert_refused(r, "touches block 1 only at the point (1, 1)")

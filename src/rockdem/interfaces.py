@@ -9,6 +9,7 @@ and overlap by a positive length.  Each such overlap is one interface
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -183,6 +184,18 @@ def _check_connected(blocks: Blocks, faces: Interfaces) -> None:
             # found by fuzzing: a block sunk 1e-6 into the ground "would float"
             j = int(others[np.argmin(near)])
             gap = float(near.min())
+            point = _point_contact(polys[k], polys[j], gap, blocks.tolerance)
+            if point is not None:
+                # found by fuzzing: a block on another's corner was said to
+                # overlap it "by a sliver deeper than the tolerance"
+                raise InputError(
+                    f"block {int(blocks.ids[k])}",
+                    f"touches block {int(blocks.ids[j])} only at the point "
+                    f"({point[0]:.6g}, {point[1]:.6g}): blocks must share an edge to "
+                    "carry force between them",
+                    "move it so that one of its edges rests along its neighbour's, make "
+                    "it fixed, or remove it",
+                )
             how = (
                 f"overlaps block {int(blocks.ids[j])} by a sliver deeper than"
                 if gap == 0
@@ -199,6 +212,19 @@ def _check_connected(blocks: Blocks, faces: Interfaces) -> None:
             "touches no other block along an edge (it would float)",
             "move it onto its neighbours, make it fixed, or remove it",
         )
+
+
+def _point_contact(a, b, gap: float, tol: float) -> tuple[float, float] | None:
+    """The point where polygons ``a`` and ``b`` (``gap`` apart) meet, if they meet
+    within ``tol`` over no more than an interface's shortest length (10 x ``tol``,
+    :func:`find_interfaces`); None if they are apart or overlap more."""
+    if gap > tol:
+        return None
+    touch = shapely.intersection(a, b) if gap == 0 else shapely.shortest_line(a, b)
+    x0, y0, x1, y1 = touch.bounds
+    if math.hypot(x1 - x0, y1 - y0) > 10 * tol:
+        return None
+    return 0.5 * (x0 + x1), 0.5 * (y0 + y1)
 
 
 def check_held(blocks: Blocks, faces: Interfaces | None = None) -> None:
