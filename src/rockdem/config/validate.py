@@ -180,10 +180,9 @@ def _describe(err: dict) -> tuple[Loc, str, str]:
         fix = "write a name (in quotes if it is a number)"
         return loc[:-1], f"a key must be a name, got `{key}`", fix
     if kind == "extra_forbidden":
-        parent = _type_at(loc[:-1])
-        allowed = list(parent.model_fields) if isinstance(parent, type) else []
-        close = difflib.get_close_matches(str(loc[-1]), allowed, n=1, cutoff=0.6)
-        fix = f"did you mean `{close[0]}`?" if close else f"allowed keys: {', '.join(allowed)}"
+        allowed = _allowed_keys(loc)
+        close = _meant_key(loc, allowed)
+        fix = f"did you mean `{close}`?" if close else f"allowed keys: {', '.join(allowed)}"
         return loc, "unknown key", fix
     if kind == "missing" and loc and isinstance(loc[-1], int) and _is_point(loc[:-1]):
         # a point with a coordinate missing (`origin: []`, a vertex `[x]`)
@@ -241,6 +240,18 @@ def _describe(err: dict) -> tuple[Loc, str, str]:
     return loc, err["msg"], "see docs/file-format.md"
 
 
+def _allowed_keys(loc: Loc) -> list[str]:
+    """The keys the format allows beside the key at ``loc``."""
+    parent = _type_at(loc[:-1])
+    return list(parent.model_fields) if isinstance(parent, type) else []
+
+
+def _meant_key(loc: Loc, allowed: list[str]) -> str | None:
+    """The allowed key the unknown key at ``loc`` is likely a misspelling of."""
+    close = difflib.get_close_matches(str(loc[-1]), allowed, n=1, cutoff=0.6)
+    return close[0] if close else None
+
+
 def _is_internal(part: Any) -> bool:
     return isinstance(part, str) and ("[" in part or part.startswith("function-"))
 
@@ -263,16 +274,19 @@ def _short(value: Any) -> str:
 def _from_validation(exc: ValidationError, source: str, nodes: Any) -> ModelFileError:
     errors = exc.errors(include_url=False)
     # report the most specific error first (deepest key path), and an unknown key
-    # before a key missing from the same mapping: it is likely the missing one
-    # misspelt (found by fuzzing: `friction_angel: 30` was reported only as
+    # before the missing key it is a misspelling of: the cause before its
+    # consequence (found by fuzzing: `friction_angel: 30` was reported only as
     # "friction_angle: required key is missing")
-    missing_from = {e["loc"][:-1] for e in errors if e["type"] == "missing"}
-    errors.sort(
-        key=lambda e: (
-            -len(e["loc"]),
-            not (e["type"] == "extra_forbidden" and e["loc"][:-1] in missing_from),
-        )
-    )
+    missing = {e["loc"] for e in errors if e["type"] == "missing"}
+
+    def misspelt(e: dict) -> bool:
+        if e["type"] != "extra_forbidden":
+            return False
+        loc = tuple(p for p in e["loc"] if not _is_internal(p))
+        meant = _meant_key(loc, _allowed_keys(loc))
+        return meant is not None and (*e["loc"][:-1], meant) in missing
+
+    errors.sort(key=lambda e: (-len(e["loc"]), not misspelt(e)))
     err = errors[0]
     loc, problem, fix = _describe(err)
     # the same problem reported twice (both coordinates of a short point) is one
