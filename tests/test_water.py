@@ -214,3 +214,18 @@ def test_model_picture_draws_the_pressure_on_every_wet_joint():
     (diagrams,) = [c for c in ax.collections if c.get_gid() == "water-pressure"]
     assert len(diagrams.get_paths()) == 2
     assert "1 block," in ax.get_title()
+
+
+def test_water_heavier_than_the_rock_is_refused():
+    """Rock of 2.6 t/m^3 with water of 9.81 (its kN/m^3 value, a units slip
+    found by fuzzing the plane-failure example) made the slope 'unstable,
+    proven': refused, naming the key and both values; 9.81 beside rock of
+    26 kN/m^3 is accepted."""
+    from dataclasses import replace
+
+    model, blocks = _section(FULL)
+    tonnes = replace(model, blocks=replace(blocks, unit_weight=blocks.unit_weight / 10.0))
+    with pytest.raises(rd.InputError, match=r"^loads water_unit_weight: 9.81 is more than") as err:
+        rd.build_system(tonnes)
+    assert "2.6" in str(err.value) and "1 t/m^3" in err.value.fix
+    assert rd.build_system(model).interfaces.n_interfaces > 0

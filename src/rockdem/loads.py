@@ -299,6 +299,7 @@ def check_water_table(blocks: Blocks, faces, loads: Loads) -> None:
     """
     if not loads.water_table:
         return
+    check_water_unit_weight(blocks, loads)
     start, end, block = blocks.edges()
     free = ~blocks.fixed[block]
     if not free.any():
@@ -326,4 +327,24 @@ def check_water_table(blocks: Blocks, faces, loads: Loads) -> None:
             f"at ({x:.6g}, {y:.6g}); water on free faces is not modelled",
             "keep the water table at or below the ground surface (it may meet the face, "
             "as a seepage face), or model ponded water as line loads",
+        )
+
+
+def check_water_unit_weight(blocks: Blocks, loads: Loads) -> None:
+    """Refuse water heavier than the rock of every free block: rock is two to
+    three times as heavy as water, so such a water unit weight is in other
+    units than the rock's (9.81 kN/m^3 beside rock of 2.6 t/m^3 made the
+    plane-failure example 'unstable, proven')."""
+    rock = blocks.unit_weight[~blocks.fixed]
+    if not loads.water_table or loads.pore_pressure_ratio or not rock.size:
+        return
+    heaviest = float(rock.max())
+    if heaviest > 0 and loads.water_unit_weight > heaviest:
+        raise InputError(
+            "loads water_unit_weight",
+            f"{loads.water_unit_weight:g} is more than the unit weight of every free block "
+            f"(at most {heaviest:g}): rock is 2 to 3 times as heavy as water, so the two are "
+            "in different units",
+            "give water and rock in the same units (water: 9.81 kN/m^3, 1 t/m^3, "
+            "0.00981 MN/m^3, 62.4 lbf/ft^3)",
         )
