@@ -137,3 +137,48 @@ def test_a_stiffness_contrast_the_solver_cannot_trust_is_refused():
             assert str(err.value).startswith("joint 'ground'")
         else:
             assert rd.build_system(model).interfaces.n_interfaces > 0
+
+
+def _model():
+    return rd.Model(_blocks(GROUND, BLOCK), _joint())
+
+
+@pytest.mark.parametrize(
+    "call,where",
+    [
+        (lambda: rd.factor_of_safety(_model(), grow=1.0), "factor_of_safety grow"),
+        (lambda: rd.factor_of_safety(_model(), grow=1.000000001), "factor_of_safety grow"),
+        (lambda: rd.factor_of_safety(_model(), width=-1), "factor_of_safety width"),
+        (lambda: rd.factor_of_safety(_model(), width=float("nan")), "factor_of_safety width"),
+        (lambda: rd.factor_of_safety(_model(), start=0), "factor_of_safety start"),
+        (lambda: rd.factor_of_safety(_model(), largest=-5), "factor_of_safety largest"),
+        (lambda: rd.factor_of_safety(_model(), smallest=2, largest=1.5), "factor_of_safety"),
+        (lambda: rd.analyse(_model(), load_steps=-5), "settings load_steps"),
+        (lambda: rd.analyse(_model(), load_steps=10**9), "settings load_steps"),
+        (lambda: rd.analyse(_model(), strength_factor=0), "analyse strength_factor"),
+        (lambda: rd.analyse(_model(), strength_factor=float("inf")), "analyse strength_factor"),
+        (lambda: rd.analyse(None), "model"),
+        (lambda: rd.analyse("slope.yaml"), "model"),
+        (lambda: rd.Model(None, _joint()), "model blocks"),
+        (lambda: rd.Model(_blocks(GROUND, BLOCK), "joint"), "model joints"),
+        (lambda: _joint(friction_angle="30"), "joint 'joint' friction_angle"),
+        (lambda: _joint(friction_angle=True), "joint 'joint' friction_angle"),
+        (lambda: rd.Blocks.from_polygons(None), "blocks"),
+        (lambda: rd.Blocks.from_polygons([GROUND, BLOCK], fixed=[True]), "blocks fixed"),
+        (lambda: rd.Blocks.from_polygons([GROUND, BLOCK], fixed="no"), "blocks fixed"),
+        (
+            lambda: rd.Blocks.from_polygons([GROUND, BLOCK], unit_weight=[1, 2, 3]),
+            "blocks unit_weight",
+        ),
+    ],
+)
+def test_bad_arguments_to_the_api_are_refused(call, where):
+    """Found by fuzzing the API: grow = 1 searched for ever, width = nan and
+    load_steps = -5 gave an answer (the last 'stable' for a failing wedge),
+    fixed=[True] for two blocks fixed both, a joint given as the text
+    'joint' made five joint types, and friction_angle='30' raised a numpy
+    TypeError inside the analysis."""
+    with pytest.raises(rd.InputError) as err:
+        call()
+    assert str(err.value).startswith(where)
+    assert err.value.fix

@@ -103,6 +103,10 @@ class Blocks:
         >>> b.n_blocks, float(b.area[0]), float(b.weight[0])
         (1, 2.0, 52.0)
         """
+        if isinstance(polygons, str | bytes) or not hasattr(polygons, "__len__"):
+            raise InputError(
+                "blocks", f"{type(polygons).__name__} is not a list of polygons", "give a list"
+            )
         n = len(polygons)
         if n == 0:
             raise InputError("blocks", "no blocks were given", "give at least one polygon")
@@ -128,12 +132,10 @@ class Blocks:
         counts = np.array([len(r) for r in clean])
         offsets = np.concatenate([[0], np.cumsum(counts)])
         vertices = np.concatenate(clean)
-        fixed_arr = np.broadcast_to(np.asarray(fixed, dtype=bool), (n,)).copy()
-        gamma = np.broadcast_to(np.asarray(unit_weight, dtype=float), (n,)).copy()
+        fixed_arr = _per_block(fixed, n, "fixed", bool)
+        gamma = _per_block(unit_weight, n, "unit_weight", float)
         tiny = (gamma > 0) & (gamma < MIN_UNIT_WEIGHT)  # underflows in the forces
-        bad = np.flatnonzero(
-            ~np.isfinite(gamma) | (gamma < 0) | (gamma > MAX_UNIT_WEIGHT) | tiny
-        )
+        bad = np.flatnonzero(~np.isfinite(gamma) | (gamma < 0) | (gamma > MAX_UNIT_WEIGHT) | tiny)
         if bad.size:
             raise InputError(
                 f"block {label[int(bad[0])]}",
@@ -375,3 +377,24 @@ def _check_overlap(blocks: Blocks, label, tol: float) -> None:
             f"overlap (common area {common[bad[0]]:.3g})",
             "blocks may touch along edges but not overlap",
         )
+
+
+def _per_block(value, n: int, key: str, kind: type) -> np.ndarray:
+    """``value`` (one for all, or one per block) as an array of ``n`` ``kind``:
+    a list of another length, text, or (for flags) numbers other than 0 and 1
+    are refused (``fixed=[True]`` for two blocks made both fixed; ``fixed="no"``
+    both fixed too)."""
+    arr = np.asarray(value)
+    if arr.dtype.kind not in ("b", "i", "u", "f") or arr.ndim > 1:
+        raise InputError(
+            f"blocks {key}", f"{value!r} is not one value per block", "give one value per block"
+        )
+    if arr.ndim == 1 and arr.shape != (n,):
+        raise InputError(
+            f"blocks {key}",
+            f"has {arr.shape[0]} values for {n} blocks",
+            "give one value per block, or a single value for all",
+        )
+    if kind is bool and arr.dtype.kind != "b" and not np.isin(arr, (0, 1)).all():
+        raise InputError(f"blocks {key}", f"{value!r} is not true or false", "give True or False")
+    return np.broadcast_to(arr.astype(kind), (n,)).copy()

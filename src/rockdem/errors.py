@@ -60,6 +60,9 @@ def check_number(
     InputError
         Naming ``where key``, the value and the range to use.
     """
+    if isinstance(value, bool | str | bytes) or type(value).__name__ == "bool_":
+        # float(True) is 1.0 and float("30") is 30.0: not numbers the user meant
+        raise InputError(f"{where} {key}", f"{value!r} is not a number", "give a number")
     try:
         v = float(value)
     except (TypeError, ValueError) as exc:

@@ -269,10 +269,31 @@ class Model:
     bolts: Sequence[Bolt] = ()
 
     def __post_init__(self) -> None:
+        if not isinstance(self.blocks, Blocks):
+            raise InputError(
+                "model blocks",
+                f"{type(self.blocks).__name__} is not rockdem Blocks",
+                "make them with rockdem.Blocks.from_polygons",
+            )
         object.__setattr__(self, "bolts", tuple(self.bolts))
-        joints = (self.joints,) if isinstance(self.joints, Joint) else tuple(self.joints)
+        given = self.joints
+        if isinstance(given, Joint):
+            joints = (given,)
+        elif isinstance(given, str | bytes | dict) or not hasattr(given, "__iter__"):
+            raise InputError(
+                "model joints", f"{given!r} is not a Joint", "give a Joint or a list of Joints"
+            )
+        else:
+            joints = tuple(given)
         if not joints:
             raise InputError("model joints", "no joint properties", "give at least one Joint")
+        odd = [i for i, j in enumerate(joints) if not isinstance(j, Joint)]
+        if odd:
+            raise InputError(
+                f"model joints[{odd[0]}]",
+                f"{joints[odd[0]]!r} is not a Joint",
+                "give rockdem.Joint objects",
+            )
         object.__setattr__(self, "joints", joints)
         if self.ground is not None:
             object.__setattr__(self, "ground", self.joint_index(self.ground))

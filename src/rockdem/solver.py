@@ -101,6 +101,12 @@ class System:
 
 def build_system(model: Model, f_block: np.ndarray | None = None) -> System:
     """Interfaces, springs, assembly and loads of a model."""
+    if not isinstance(model, Model):  # (a file name, None, ...)
+        raise InputError(
+            "model",
+            f"{type(model).__name__} is not a rockdem Model",
+            "build one with rockdem.Model, or read a model file with rockdem.config.load_model",
+        )
     blocks = model.blocks
     faces = find_interfaces(blocks)
     faces = assign_joints(

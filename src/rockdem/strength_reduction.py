@@ -10,6 +10,7 @@ finds equilibrium there sends the search on.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import replace
 
@@ -17,6 +18,7 @@ import numpy as np
 
 from .analysis import _evidence, _package, _settle, analyse
 from .certificate import prove_failed_trial
+from .errors import InputError, check_number
 from .mechanism import relaxation_mechanism
 from .model import Model
 from .relaxation import CONFIRM_MARGINS, confirm_failed_trial, with_relaxation
@@ -30,6 +32,48 @@ RESTARTS = 3
 #: ... and at most this many times past a limit beyond which the confirmation
 #: found equilibrium (each moves the bracket up by CONFIRM_MARGINS[0] or more)
 PROGRESS_RESTARTS = 20
+
+
+#: most strength-reduction trials the search's settings may allow (each is a
+#: full analysis): settings that allow more are refused
+MAX_TRIALS = 100
+
+
+def trial_bound(width: float, start: float, grow: float, smallest: float, largest: float) -> int:
+    """Most trials a strength-reduction search with these settings can take.
+
+    Down from ``start`` to ``smallest`` or up to ``largest`` by ``grow``,
+    then bisection (two trials each) of a bracket at most ``largest x (grow - 1)``
+    wide down to ``width``.
+    """
+    log_grow = math.log(grow)
+    down = math.ceil(math.log(max(start / smallest, 1.0)) / log_grow)
+    up = math.ceil(math.log(max(largest / start, 1.0)) / log_grow)
+    halvings = math.ceil(math.log2(max(largest * (grow - 1.0) / width, 1.0)))
+    return 1 + max(down, up) + 2 * halvings
+
+
+def _check_search(width, start, grow, smallest, largest) -> None:
+    """The search's settings as the model file's ``strength_reduction`` allows
+    them (grow = 1 looped for ever, width = nan stopped at once)."""
+    where = "factor_of_safety"
+    check_number(where, "width", width, lo=1e-6, hi=1.0 + 1e-12)
+    check_number(where, "grow", grow, lo=1.0, hi=100.0 + 1e-12, open_lo=True)
+    for key, value in (("start", start), ("smallest", smallest), ("largest", largest)):
+        check_number(where, key, value, lo=1e-6, hi=1e6 + 1e-6)
+    if not smallest < start < largest:
+        raise InputError(
+            f"{where} start",
+            f"{start:g} is not between smallest ({smallest:g}) and largest ({largest:g})",
+            "give smallest < start < largest",
+        )
+    n = trial_bound(width, start, grow, smallest, largest)
+    if n > MAX_TRIALS:
+        raise InputError(
+            f"{where} grow",
+            f"these settings allow up to {n} trials, more than {MAX_TRIALS}",
+            "use a larger grow or width, or a narrower smallest..largest",
+        )
 
 
 def factor_of_safety(
@@ -72,6 +116,7 @@ def factor_of_safety(
     >>> bool(abs(fos.value - np.tan(np.radians(30)) / np.tan(d)) < 0.005)
     True
     """
+    _check_search(width, start, grow, smallest, largest)
     system = model if isinstance(model, System) else build_system(model)
     trials: list[Trial] = []
 

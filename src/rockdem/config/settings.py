@@ -6,36 +6,20 @@ reduction and the stabilisation design."""
 
 from __future__ import annotations
 
-import math
 from typing import Annotated, Literal
 
 from pydantic import Field, model_validator
 
 from ..model import MAX_ITERATIONS, MAX_LOAD_STEPS, TOLERANCE_RANGE
+from ..strength_reduction import MAX_TRIALS, trial_bound
 from .sections import RemoveSpec
 from .values import Direction, Magnitude, Point, _Section, bounded, whole
 
-#: Most strength-reduction trials the settings may allow (each is a full analysis).
-MAX_TRIALS = 100
 #: Most stabilisation rounds, and designs and stages.
 MAX_ROUNDS = 50
 MAX_DESIGNS = 50
 
 Factor = bounded(1e-6, 1e6)
-
-
-def trial_bound(width: float, start: float, grow: float, smallest: float, largest: float) -> int:
-    """Most trials a strength-reduction search with these settings can take.
-
-    Down from ``start`` to ``smallest`` or up to ``largest`` by ``grow``,
-    then bisection (two trials each) of a bracket at most ``largest x (grow - 1)``
-    wide down to ``width``.
-    """
-    log_grow = math.log(grow)
-    down = math.ceil(math.log(max(start / smallest, 1.0)) / log_grow)
-    up = math.ceil(math.log(max(largest / start, 1.0)) / log_grow)
-    halvings = math.ceil(math.log2(max(largest * (grow - 1.0) / width, 1.0)))
-    return 1 + max(down, up) + 2 * halvings
 
 
 class StrengthReductionSpec(_Section):
