@@ -217,25 +217,34 @@ def water_loads(blocks: Blocks, faces, loads: Loads) -> np.ndarray:
     # the table's pieces, with flat extensions beyond its ends
     xs = np.concatenate([[-np.inf], table[:, 0], [np.inf]])
     hs = np.concatenate([[table[0, 1]], table[:, 1], [table[-1, 1]]])
-    force = np.zeros(len(length))
-    arm = np.zeros(len(length))  # force x distance from p0 along the interface
-    for j in range(len(xs) - 1):
-        lo, hi = xs[j], xs[j + 1]
-        t0, t1 = _clip_to_x(p0[:, 0], d[:, 0], lo, hi)
-        piece = t1 > t0
-        if not piece.any():
-            continue
-        finite = np.isfinite(lo) and np.isfinite(hi)
-        slope = (hs[j + 1] - hs[j]) / (hi - lo) if finite else 0.0
-        base, x_ref = (hs[j], lo) if np.isfinite(lo) else (hs[j + 1], 0.0)
-        g0, g1 = (
-            base + slope * (p0[:, 0] + t * d[:, 0] - x_ref) - (p0[:, 1] + t * d[:, 1])
-            for t in (t0, t1)
-        )  # head above each end of the piece
-        F, s_bar = _positive_part(g0, g1, (t1 - t0) * length)
-        wet = piece & (F > 0)
-        force += np.where(wet, F, 0.0)
-        arm += np.where(wet, F * (t0 * length + np.where(wet, s_bar, 0.0)), 0.0)
+    # every (interface, piece) pair whose x ranges overlap: a piece per
+    # interface or a few, not every piece for every interface (a table of 1.3
+    # million points took 248 s to check)
+    x_lo = np.minimum(p0[:, 0], p1[:, 0])
+    x_hi = np.maximum(p0[:, 0], p1[:, 0])
+    first = np.searchsorted(xs, x_lo, side="right") - 1
+    count = np.searchsorted(xs, x_hi, side="right") - first
+    i = np.repeat(np.arange(len(length)), count)
+    j = np.repeat(first - np.cumsum(count) + count, count) + np.arange(count.sum())
+    lo, hi = xs[j], xs[j + 1]
+    x0, y0, dx, dy, L = p0[i, 0], p0[i, 1], d[i, 0], d[i, 1], length[i]
+    t0, t1 = _clip_to_x(x0, dx, lo, hi)
+    piece = t1 > t0
+    finite = np.isfinite(lo) & np.isfinite(hi)
+    with np.errstate(invalid="ignore"):
+        slope = np.where(finite, (hs[j + 1] - hs[j]) / np.where(finite, hi - lo, 1.0), 0.0)
+    base = np.where(np.isfinite(lo), hs[j], hs[j + 1])
+    x_ref = np.where(np.isfinite(lo), lo, 0.0)
+    g0, g1 = (
+        base + slope * (x0 + t * dx - x_ref) - (y0 + t * dy) for t in (t0, t1)
+    )  # head above each end of the piece
+    F, s_bar = _positive_part(g0, g1, (t1 - t0) * L)
+    wet = piece & (F > 0)
+    n = len(length)
+    force = np.bincount(i, weights=np.where(wet, F, 0.0), minlength=n)
+    arm = np.bincount(  # force x distance from p0 along the interface
+        i, weights=np.where(wet, F * (t0 * L + np.where(wet, s_bar, 0.0)), 0.0), minlength=n
+    )
     force *= loads.water_unit_weight
     arm *= loads.water_unit_weight
     at = np.divide(arm, force, out=np.zeros_like(arm), where=force > 0)
