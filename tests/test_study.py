@@ -639,3 +639,66 @@ bolts:
     use = table.sort_values("joints.rock.friction_angle")["bolt_utilisation"].to_numpy(float)
     assert np.all((use > 0) & (use <= 1)), use
     assert np.all(np.diff(use) < 0), use
+
+
+# ------------------------------------------- an unreachable scheduler (F13)
+def test_an_unreachable_scheduler_leaves_the_folder_as_it_was(tmp_path, monkeypatch):
+    """Fuzzing (F13): `--scheduler tcp://127.0.0.1:1` failed after the folder
+    had study.json, samples.csv and samples.parquet, so the next study there
+    was refused as "another study".  The scheduler is reached before anything
+    is written."""
+    import socket
+
+    from rockdem.studies import on_dask
+
+    monkeypatch.setattr(on_dask, "CONNECT_TIMEOUT", 1, raising=False)
+    with socket.socket() as s:  # a port nothing listens on
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    model = write_model(tmp_path, normal_phi(samples=2, compute="verdict"))
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "notes.txt").write_text("mine\n")
+    address = f"tcp://127.0.0.1:{port}"
+    r = invoke("study", model, "--out", out, "--scheduler", address)
+    refused(r, f"--scheduler {address}", "no dask scheduler answered", "tcp://host:8786")
+    assert sorted(p.name for p in out.iterdir()) == ["notes.txt"]
+    r = invoke("study", model, "--out", tmp_path / "new", "--scheduler", address)
+    refused(r, f"--scheduler {address}")
+    assert not (tmp_path / "new").exists()
+    other = write_model(tmp_path, normal_phi(samples=3, compute="verdict"), "other.yaml")
+    r = invoke("study", other, "--out", out, "--workers", 0, "--quiet")
+    assert r.exit_code == 0, r.output
+
+
+def test_a_scheduler_address_where_something_else_answers_is_one_clear_line(tmp_path):
+    """Fuzzing (F13): a port where something other than a dask scheduler answers
+    gave "cannot connect (MemoryError: Unable to allocate 3.07 EiB ...)"."""
+    import socket
+    import threading
+
+    server = socket.socket()
+    server.bind(("127.0.0.1", 0))
+    server.listen()
+    port = server.getsockname()[1]
+
+    def answer():
+        while True:
+            try:
+                conn, _ = server.accept()
+            except OSError:
+                return
+            with conn:
+                conn.sendall(b"HTTP/1.1 400 Bad Request\r\nContent-Length: 0\r\n\r\n" * 4)
+                time.sleep(0.2)
+
+    threading.Thread(target=answer, daemon=True).start()
+    model = write_model(tmp_path, normal_phi(samples=2, compute="verdict"))
+    address = f"tcp://127.0.0.1:{port}"
+    try:
+        r = invoke("study", model, "--out", tmp_path / "out", "--scheduler", address)
+    finally:
+        server.close()
+    line = refused(r, f"--scheduler {address}", "is not a dask scheduler", "tcp://host:8786")
+    assert "MemoryError" not in line and "EiB" not in line
+    assert not (tmp_path / "out").exists()

@@ -31,20 +31,43 @@ def check_address(client: str) -> None:
         )
 
 
+#: Seconds a scheduler given by its address has to answer.
+CONNECT_TIMEOUT = 20
+
+
+def connect(address: str):
+    """A client of the dask scheduler at ``address``, or an InputError in one line
+    naming the address and the fix.  :func:`rockdem.study` calls it before it
+    writes anything, so that a scheduler that cannot be reached leaves the
+    results folder as it was.
+
+    The underlying error is not quoted: dask reads whatever answers at the
+    address as its own messages, and a web server there gave "MemoryError:
+    Unable to allocate 3.07 EiB" (found by fuzzing)."""
+    dd = import_dask()
+    check_address(address)
+    try:
+        return dd.Client(address, timeout=f"{CONNECT_TIMEOUT}s")
+    except Exception as exc:
+        if isinstance(exc, TimeoutError) or "timed out" in str(exc).lower():
+            problem = f"no dask scheduler answered there within {CONNECT_TIMEOUT:g} s"
+        elif isinstance(exc, OSError):
+            problem = f"no dask scheduler answered there ({exc.strerror or 'unreachable'})"
+        else:  # something answered, but not in dask's protocol
+            problem = "what answers there is not a dask scheduler (or not a compatible one)"
+        raise InputError(
+            f"--scheduler {address}",
+            problem,
+            "start one (`dask scheduler`) and give its address, such as tcp://host:8786",
+        ) from None
+
+
 def _client(client, workers: int | None, n_tasks: int):
     """(client, things to close): the given client, one connected to an address, or
     a local cluster of ``workers`` processes."""
     dd = import_dask()
     if isinstance(client, str):
-        check_address(client)
-        try:
-            c = dd.Client(client, timeout="20s")
-        except (OSError, TimeoutError, ValueError, MemoryError) as exc:
-            raise InputError(
-                f"--scheduler {client}",
-                f"cannot connect ({type(exc).__name__}: {exc})",
-                "give the address of a running dask scheduler, such as tcp://host:8786",
-            ) from None
+        c = connect(client)
         return c, [c]
     if client is not None:
         return client, []

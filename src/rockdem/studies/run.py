@@ -324,8 +324,9 @@ def study(
         The study (the content of a `study:` section, or a file holding one);
         default: the model file's own `study:` section.
     client : dask.distributed.Client or str, optional
-        Where the samples run: a client, or a scheduler address; default a
-        local cluster of ``workers`` processes.
+        Where the samples run: a client, or a scheduler address (reached before
+        anything is written, so that one that cannot be reached leaves ``out``
+        as it was); default a local cluster of ``workers`` processes.
     out : path, optional
         Results folder: samples.csv (a row appended as each sample finishes),
         samples.parquet, summary.json, pictures and the worst samples' model
@@ -343,6 +344,12 @@ def study(
     StudyResult
         ``(table, summary)``: a pandas DataFrame (one row per sample, sorted)
         and the summary dict.
+
+    Raises
+    ------
+    InputError
+        For a bad study or folder, and a scheduler that cannot be reached.  A
+        run stopped before any sample gave a row removes the files it wrote.
     """
     try:
         import pandas  # noqa: F401
@@ -365,6 +372,22 @@ def study(
         spec_file = spec if isinstance(spec, str | os.PathLike) else None
         check_inputs_outside(folder, [plan.source, spec_file])
         check_worst_unedited(folder)
+    own_client = None
+    if isinstance(client, str):
+        from .on_dask import connect
+
+        # reached before anything is written: an unreachable scheduler left the
+        # folder holding study.json and empty tables (found by fuzzing)
+        client = own_client = connect(client)
+    try:
+        return _run(plan, client, folder, workers, overwrite, progress)
+    finally:
+        if own_client is not None:
+            own_client.close()
+
+
+def _run(plan: Plan, client, folder: Path | None, workers, overwrite, progress) -> StudyResult:
+    """The rest of :func:`study`: the samples not done yet, the summary, the files."""
     store = Store(plan.names, folder, plan.manifest(), overwrite)
     total = len(plan.values)
     resumed = len(store.done)
@@ -381,6 +404,7 @@ def study(
 
     n_workers = 0
     started = time.perf_counter()
+    ended = False
     try:
         if todo and workers == 0 and client is None:
             _run_serial(plan, todo, on_row)
@@ -388,8 +412,12 @@ def study(
             from .on_dask import run_on_dask
 
             n_workers = run_on_dask(plan, todo, on_row, client, workers)
+        ended = True
     finally:
-        store.close()
+        if not ended and not store.rows:
+            store.discard()  # stopped before any row: the folder as it was
+        else:
+            store.close()
     from .stats import summarise
 
     table = store.table()

@@ -167,6 +167,7 @@ class Store:
         self._writer = None
         self._parquet_at = 0.0
         self._dirty = False
+        self._made: Path | None = None  # the topmost folder this store created
         if folder is not None:
             self._open(folder, manifest, overwrite)
 
@@ -175,6 +176,8 @@ class Store:
         folder = Path(folder)
         if folder.exists() and not folder.is_dir():
             raise InputError(f"--out {folder}", "is a file", "give a folder")
+        missing = [p for p in (folder, *folder.parents) if not os.path.lexists(p)]
+        self._made = missing[-1] if missing else None
         folder.mkdir(parents=True, exist_ok=True)
         info, csv_path = folder / "study.json", folder / "samples.csv"
         if info.exists() and not overwrite:
@@ -307,6 +310,27 @@ class Store:
         self._fh = self._writer = None
         self._rewrite_csv(self.folder / "samples.csv", sorted(self.rows))
         self.write_parquet()
+
+    def discard(self) -> None:
+        """Remove what this store wrote (study.json, samples.csv, samples.parquet) and
+        the folders it made, when they are empty: for a run that ends with no row
+        worth keeping, so that the folder is as it was.  Nothing else is touched."""
+        self.close()
+        if self.folder is None:
+            return
+        for name in ("study.json", "samples.csv", "samples.parquet"):
+            (self.folder / name).unlink(missing_ok=True)
+        if self._made is None:
+            return
+        path = self.folder
+        while True:
+            try:
+                path.rmdir()  # only when empty
+            except OSError:
+                return
+            if path == self._made:
+                return
+            path = path.parent
 
 
 def _atomic_write(path: Path, write: Callable[[Path], Any]) -> None:
