@@ -641,6 +641,68 @@ bolts:
     assert np.all(np.diff(use) < 0), use
 
 
+# -------------------------------------------------- samples left out (F6)
+def wide_phi(**kw) -> dict:
+    """Friction angle normal(30, 20): seed 5 draws 30 samples of which 6 are below
+    0 (the weak tail) and 1 above 90, so 7 cannot be analysed."""
+    spec = {"inputs": {PHI: {"distribution": "normal", "mean": 30, "sd": 20}}}
+    return {**spec, "samples": 30, "seed": 5, "compute": "verdict", **kw}
+
+
+def test_samples_left_out_in_the_weak_tail_are_said_to_bias_the_pf(tmp_path):
+    """Fuzzing (F6): samples out of range were dropped from P(FS < 1) with only a
+    note on stderr, while most of them lay in the weak tail (phi < 0): the
+    estimate was biased low without a word.  The summary (text, summary.json,
+    --json, the report) says how many were left out, on which side, which way
+    that biases P(failure), P(failure) if they all held or all failed, and a
+    distribution that stays in range."""
+    model = write_model(tmp_path, wide_phi())
+    out = tmp_path / "out"
+    r = invoke("study", model, "--out", out, "--workers", 0, "--json")
+    assert r.exit_code == 0, r.output
+    s = json.loads(r.stdout)
+    assert s == {**s, "errors": 7, "ok": 23}
+    left = s["left_out"]
+    assert left["n"] == 7 and left["bias"] == "underestimated"
+    (why,) = left["reasons"]
+    assert why["input"] == PHI and (why["n"], why["below"], why["above"]) == (7, 6, 1)
+    assert left["pf_if_stable"] == pytest.approx(s["failed"] / 30)
+    assert left["pf_if_failed"] == pytest.approx((s["failed"] + 7) / 30)
+    assert left["pf_if_stable"] <= s["pf"] <= left["pf_if_failed"]
+    assert json.loads((out / "summary.json").read_text())["left_out"] == left
+    for text in (left["note"], invoke("study", model, "--out", out, "--workers", 0).stdout):
+        text = " ".join(text.split())  # (rich wraps long lines)
+        assert "7 of 30 samples were left out" in text, text
+        assert f"6 of the 7 left out had {PHI} below its valid range" in text, text
+        assert "is likely underestimated" in text, text
+        assert "truncated-normal" in text, text
+    from rockdem.studies.report import html_section
+
+    html = "".join(html_section(out, lambda *a: ""))
+    assert "likely underestimated" in html and "truncated-normal" in html
+
+
+def test_when_no_sample_can_be_analysed_the_study_is_refused(tmp_path):
+    """Fuzzing (F6): with sd 1e300 every sample was out of range, nothing was
+    computed and the command exited 0.  It is refused in one line (why and the
+    fix), and the folder is left as it was."""
+    spec = {"inputs": {PHI: {"distribution": "normal", "mean": 33, "sd": 1e300}}, "samples": 4}
+    model = write_model(tmp_path, spec)
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "notes.txt").write_text("mine\n")
+    r = invoke("study", model, "--out", out, "--workers", 0)
+    refused(
+        r, "no sample could be analysed", f"{PHI} was out of its valid range", "truncated-normal"
+    )
+    assert sorted(p.name for p in out.iterdir()) == ["notes.txt"]
+    r = invoke("study", model, "--out", tmp_path / "new", "--workers", 0)
+    refused(r, "no sample could be analysed")
+    assert not (tmp_path / "new").exists()
+    with pytest.raises(rockdem.InputError, match="no sample could be analysed"):
+        rockdem.study(plane_document(), spec, workers=0)
+
+
 # ------------------------------------------- an unreachable scheduler (F13)
 def test_an_unreachable_scheduler_leaves_the_folder_as_it_was(tmp_path, monkeypatch):
     """Fuzzing (F13): `--scheduler tcp://127.0.0.1:1` failed after the folder

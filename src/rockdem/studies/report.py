@@ -61,6 +61,9 @@ def html_section(study, fig: Callable[..., str]) -> list[str]:
         )
     if rows:
         out.append(html_table(["", "value"], [(k, esc(v)) for k, v in rows], left=1))
+    left = s.get("left_out") or {}
+    if left.get("note"):
+        out.append(f'<p class="note"><strong>Samples left out.</strong> {esc(left["note"])}</p>')
     for stem, (figure, caption) in figures(table, s, names).items():
         out.append(fig(figure, esc(caption), stem, f"fig-study-{stem}"))
     sens = [r for r in s.get("sensitivity", []) if r["spearman"] is not None]

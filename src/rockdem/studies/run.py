@@ -343,13 +343,19 @@ def study(
     -------
     StudyResult
         ``(table, summary)``: a pandas DataFrame (one row per sample, sorted)
-        and the summary dict.
+        and the summary dict.  A sample that cannot be analysed (an input out
+        of its valid range, say) is a row with its ``error``, left out of the
+        statistics; ``summary["left_out"]`` says how many, why, and which way
+        that likely biases the probability of failure (see
+        :func:`rockdem.studies.stats.left_out`).
 
     Raises
     ------
     InputError
-        For a bad study or folder, and a scheduler that cannot be reached.  A
-        run stopped before any sample gave a row removes the files it wrote.
+        For a bad study or folder, a scheduler that cannot be reached, and when
+        no sample at all could be analysed (its most common reason and the fix;
+        the files this run wrote are removed unless it continued an earlier
+        run).  A run stopped before any sample gave a row also removes them.
     """
     try:
         import pandas  # noqa: F401
@@ -430,7 +436,12 @@ def _run(plan: Plan, client, folder: Path | None, workers, overwrite, progress) 
         confidence=s.confidence,
         worst=s.worst,
         planned=total,
+        distributions={n: i.distribution for n, i in s.inputs.items()},
     )
+    if summary["done"] and not summary["ok"]:
+        if not resumed:
+            store.discard()  # nothing worth keeping: the folder as it was
+        raise _nothing_analysed(plan, summary)
     summary.update(
         model_file=plan.source,
         inputs=plan.names,
@@ -447,6 +458,25 @@ def _run(plan: Plan, client, folder: Path | None, workers, overwrite, progress) 
 
         write_outputs(folder, plan, table, summary)
     return StudyResult(table, summary)
+
+
+def _nothing_analysed(plan: Plan, summary: dict) -> InputError:
+    """The error of a study none of whose samples could be analysed (every one out of
+    range, say): its most common reason and the fix, in one line."""
+    left = summary["left_out"]
+    top = left["reasons"][0]
+    n, done = top["n"], summary["done"]
+    if top.get("input"):
+        name = top["input"]
+        valid = f" ({top['range']})" if top.get("range") else ""
+        problem = f"{name} was out of its valid range{valid} in {n} of {done}"
+        fix = top["fix"]
+    else:
+        from .stats import _short
+
+        problem = f"{n} of {done} stopped with: {_short(top['example'])}"
+        fix = "fix what that names, or give inputs whose samples are valid models"
+    return InputError(f"study {plan.source}", f"no sample could be analysed: {problem}", fix)
 
 
 def _count(counts: dict, row: dict) -> None:
