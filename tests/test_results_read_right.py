@@ -803,3 +803,27 @@ def test_trust_names_bond_lost_at_spring_points_that_opened():
     opened = statements(0.0)
     assert len(opened) == 1 and "3 lobatto points" in opened[0]
     assert statements(1e4) == []
+
+
+def test_an_equilibrium_far_beyond_small_displacements_is_flagged():
+    """Joints of stiffness 1 (found by fuzzing: the bedded slope moved 2.8 km
+    and turned 43 times, reported 'STABLE' without a word): the analysis
+    warns, and the report's 'how far to trust this' opens with it; stiff
+    joints give no such warning."""
+    import warnings
+
+    from rockdem.trust import trust_statements
+    from rockdem.verification import block_on_plane
+
+    def analysed(kn):
+        joint = rd.Joint(normal_stiffness=kn, friction_angle=40)
+        return rd.analyse(block_on_plane(20, joint, width=2.0, height=1.0, unit_weight=25))
+
+    with pytest.warns(rd.ModelWarning, match="far beyond the small displacements"):
+        soft = analysed(1.0)
+    assert soft.stable
+    assert trust_statements(soft)[0].startswith("In equilibrium the blocks move up to")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", rd.ModelWarning)
+        stiff = analysed(1e6)
+    assert not any("small displacements" in t for t in trust_statements(stiff))

@@ -11,6 +11,7 @@ excess force).  The factor of safety (strength reduction) builds on it:
 from __future__ import annotations
 
 import logging
+import warnings
 from collections.abc import Callable
 from dataclasses import replace
 
@@ -18,7 +19,7 @@ import numpy as np
 
 from .certificate import certificate_for, prove_in_region, with_certificate
 from .continuation import RELAXED, solve_equilibrium
-from .errors import check_number
+from .errors import ModelWarning, check_number
 from .linalg import norm
 from .mechanism import held_blocks, newton_mechanism, relaxation_mechanism, slip_surface
 from .model import Model, Settings
@@ -361,7 +362,36 @@ def analyse(
                 _, carried = tabulate(system, state, resp, strength_factor, reduce)
                 failed = replace(failed, limit_interfaces=carried)
             return replace(failed, unloaded_limit=limit)
-    return _package(system, sol, state, lam_prev, strength_factor, True, steps, q)
+    done = _package(system, sol, state, lam_prev, strength_factor, True, steps, q)
+    text = large_displacement(done)
+    if text is not None:
+        warnings.warn(ModelWarning(text), stacklevel=2)
+    return done
+
+
+#: a block that moves more than this share of the mean block size (or turns
+#: more than this many radians) in equilibrium is beyond the small
+#: displacements the method assumes
+LARGE_DISPLACEMENT = 0.05
+
+
+def large_displacement(a: Analysis) -> str | None:
+    """A warning when the equilibrium ``a`` moved its blocks far beyond small
+    displacements (joints of stiffness 1 under a 10 m slope: 2.8 km and 43
+    turns, reported stable); None otherwise or when ``a`` is not stable."""
+    if not a.stable or not a.displacement.size:
+        return None
+    size = a.system.assembly.length_scale
+    move = float(np.hypot(a.displacement[:, 0], a.displacement[:, 1]).max())
+    turn = float(np.abs(a.displacement[:, 2]).max())
+    if move <= LARGE_DISPLACEMENT * size and turn <= LARGE_DISPLACEMENT:
+        return None
+    return (
+        f"in equilibrium the blocks move up to {move:.3g} ({move / size:.3g} times the mean "
+        f"block size) and turn up to {turn:.3g} rad: far beyond the small displacements the "
+        "method assumes, so the verdict does not hold; the joints are too soft for these "
+        "loads: raise their normal_stiffness"
+    )
 
 
 def _from_relaxed(system, state, q, load_factor, factor, stage):

@@ -86,6 +86,13 @@ def trust_statements(a: Analysis, fos: FactorOfSafety | None = None) -> list[str
         f"Each joint is represented by {settings.points_per_interface} spring points "
         f"({settings.quadrature} rule); stresses between them are interpolated."
     )
+    from .analysis import large_displacement
+
+    for shown in (a, fos.stable_analysis if fos is not None else None):
+        text = large_displacement(shown) if shown is not None else None
+        if text is not None:
+            out.insert(0, f"{text[0].upper()}{text[1:]}.")
+            break
     limit = fos.stable_analysis if fos is not None else None  # the state at the limit
     out += cohesion_lost_in_tension(limit if limit is not None else a)
     if a.system.model.loads.water_table:
