@@ -22,7 +22,7 @@ from .continuation import RELAXED, solve_equilibrium
 from .errors import ModelWarning, check_number
 from .linalg import norm
 from .mechanism import held_blocks, newton_mechanism, relaxation_mechanism, slip_surface
-from .model import Model, Settings
+from .model import MAX_LOAD_STEPS, Model, check_count
 from .relaxation import TOLERANCE as RELAXATION_TOLERANCE
 from .relaxation import confirm_failed_analysis
 from .results import Analysis, Evidence, Step, tabulate
@@ -310,8 +310,8 @@ def analyse(
     True
     """
     check_number("analyse", "strength_factor", strength_factor, lo=1e-6, hi=1e6 + 1e-6)
-    if load_steps is not None:  # as Settings(load_steps=...) would take it
-        replace(Settings(), load_steps=load_steps)
+    if load_steps is not None:
+        check_count("analyse load_steps", load_steps, MAX_LOAD_STEPS)
     system = model if isinstance(model, System) else build_system(model)
     n_steps = load_steps or system.model.settings.load_steps
     state = SpringState.initial(system.springs.n_springs)

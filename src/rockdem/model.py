@@ -152,6 +152,15 @@ MAX_ITERATIONS = 1000
 TOLERANCE_RANGE = (1e-12, 1e-2)
 
 
+def check_count(where: str, value, top: int) -> int:
+    """``value`` as a whole number from 1 to ``top`` (InputError naming ``where``)."""
+    if isinstance(value, bool) or not isinstance(value, int | np.integer):
+        raise InputError(where, f"{value!r} is not a whole number", f"use 1 to {top}")
+    if not 1 <= value <= top:
+        raise InputError(where, f"{value} is out of range", f"use 1 to {top}")
+    return int(value)
+
+
 @dataclass(frozen=True)
 class Settings:
     """How the equations are integrated and solved.
@@ -183,14 +192,8 @@ class Settings:
     reduce_tensile: bool = True
 
     def __post_init__(self) -> None:
-        for key, top in (("load_steps", MAX_LOAD_STEPS), ("max_iterations", MAX_ITERATIONS)):
-            value = getattr(self, key)
-            if isinstance(value, bool) or not isinstance(value, int | np.integer):
-                raise InputError(
-                    f"settings {key}", f"{value!r} is not a whole number", f"use 1 to {top}"
-                )
-            if not 1 <= value <= top:
-                raise InputError(f"settings {key}", f"{value} is out of range", f"use 1 to {top}")
+        check_count("settings load_steps", self.load_steps, MAX_LOAD_STEPS)
+        check_count("settings max_iterations", self.max_iterations, MAX_ITERATIONS)
         if self.quadrature not in POINTS_RANGE:
             raise InputError(
                 "settings quadrature",
