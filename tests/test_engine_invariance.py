@@ -105,7 +105,15 @@ def test_scaling_lengths_by_ten(reference):
 
 @pytest.mark.parametrize("kn", [1e3, 1e9])
 def test_absolute_stiffness_does_not_matter_without_cohesion(reference, kn):
-    fos, unstable, failed = _summary(_model(kn=kn))
+    """The same bracket for joints 1,000 times softer or stiffer.  The soft
+    ones move the blocks half their size, beyond small displacements: the
+    analysis says so (the small-displacement equations, linear in the
+    stiffness, still give the same factor)."""
+    if kn < 1e4:
+        with pytest.warns(rd.ModelWarning, match="beyond the small displacements"):
+            fos, unstable, failed = _summary(_model(kn=kn))
+    else:
+        fos, unstable, failed = _summary(_model(kn=kn))
     assert fos.bracket == pytest.approx(reference[0].bracket, rel=1e-9)
     assert unstable == reference[1] and failed == reference[2]
 
