@@ -714,3 +714,24 @@ def test_an_empty_drawing_name_is_called_empty(tmp_path):
     text = MODEL.replace("geometry: {dxf: section.dxf}", "geometry: {dxf: ''}")
     with pytest.raises(ModelFileError, match=r"geometry\.dxf: is empty"):
         parse_model(text, source=str(tmp_path / "m.yaml"))
+
+
+def test_overwriting_results_refuses_to_leave_another_formats_files(tmp_path, fos_results):
+    """Found by fuzzing: results with VTK, then another model's results over
+    them with --overwrite and no --format left the first model's .vtu files
+    beside the second's tables.  Refused, naming the files; asking for the
+    format too replaces them."""
+    out, _ = fos_results
+    (tmp_path / "box.yaml").write_text((out.parent / "model.yaml").read_text())
+    draw(tmp_path)
+    folder = tmp_path / "o"
+    first = invoke("run", tmp_path / "box.yaml", "--out", folder, "--format", "vtk", "-q")
+    assert first.exit_code == 0, first.stderr
+    vtu = (folder / "blocks.vtu").read_bytes()
+    again = invoke("run", tmp_path / "box.yaml", "--out", folder, "--overwrite", "-q")
+    refused(again, "holds blocks.vtu, interfaces.vtu of an earlier run")
+    assert (folder / "blocks.vtu").read_bytes() == vtu  # nothing removed
+    both = invoke(
+        "run", tmp_path / "box.yaml", "--out", folder, "--overwrite", "--format", "vtk", "-q"
+    )
+    assert both.exit_code == 0, both.stderr

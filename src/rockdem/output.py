@@ -47,12 +47,20 @@ __all__ = [
 
 # --------------------------------------------------------------- writing
 def check_output_dir(
-    folder: str | Path, *, overwrite: bool = False, extra_files: tuple[str, ...] = ()
+    folder: str | Path,
+    *,
+    overwrite: bool = False,
+    extra_files: tuple[str, ...] = (),
+    other_files: tuple[str, ...] = (),
 ) -> Path:
     """Fail early if results cannot be written to ``folder``.
 
     ``extra_files`` are the files of the exchange formats asked for
-    (:mod:`rockdem.exchange.results`), checked like the others.
+    (:mod:`rockdem.exchange.results`), checked like the others;
+    ``other_files`` those of the formats not asked for: when results are
+    overwritten, such files of an earlier run would stay beside the new
+    results, another model's VTK beside this one's tables (found by
+    fuzzing), so they are refused rather than deleted.
 
     Raises
     ------
@@ -67,6 +75,14 @@ def check_output_dir(
             raise InputError(
                 f"--out {folder}", f"{name} is a folder", "remove it or write to another folder"
             )
+    stale = [name for name in other_files if (folder / name).exists()]
+    if overwrite and stale and any((folder / name).exists() for name in RESULT_FILES):
+        raise InputError(
+            f"--out {folder}",
+            f"holds {', '.join(stale)} of an earlier run, which this run would not replace: "
+            "the folder would mix two results",
+            "remove them, write to another folder, or ask for that format too (--format)",
+        )
     if not overwrite:
         for name in (*RESULT_FILES, *extra_files):
             if (folder / name).exists():

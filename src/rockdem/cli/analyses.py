@@ -64,6 +64,14 @@ def _format_files(formats: tuple[str, ...]) -> tuple[str, ...]:
     return format_files(formats) if formats else ()
 
 
+def _other_format_files(formats: tuple[str, ...]) -> tuple[str, ...]:
+    """The files of the exchange formats not asked for."""
+    from ..exchange.results import FORMATS
+
+    asked = set(_format_files(formats))
+    return tuple(name for names in FORMATS.values() for name in names if name not in asked)
+
+
 def run(
     model: ModelArg = None,
     example: ExampleOpt = None,
@@ -90,7 +98,12 @@ def run(
         formats = _formats(format_, out_dir)
         path, m, cfg = _load(model, example)
         if out_dir is not None:
-            check_output_dir(out_dir, overwrite=overwrite, extra_files=_format_files(formats))
+            check_output_dir(
+                out_dir,
+                overwrite=overwrite,
+                extra_files=_format_files(formats),
+                other_files=_other_format_files(formats),
+            )
         with _progress(quiet, "load steps") as bar:
             task = bar.add_task("load steps", total=m.settings.load_steps)
             result = analyse(m, progress=_step_hook(bar, task))
@@ -322,7 +335,12 @@ def fos(
         formats = _formats(format_, out_dir)
         path, m, cfg = _load(model, example)
         if out_dir is not None:
-            check_output_dir(out_dir, overwrite=overwrite, extra_files=_format_files(formats))
+            check_output_dir(
+                out_dir,
+                overwrite=overwrite,
+                extra_files=_format_files(formats),
+                other_files=_other_format_files(formats),
+            )
         with _progress(quiet, "strength reduction") as bar:
             task = bar.add_task("strength reduction trials", total=None)
             result = factor_of_safety(m, **_fos_options(cfg), progress=_trial_hook(bar, task))
