@@ -328,3 +328,18 @@ def test_failure_picture_draws_the_support_forces():
 
     legend = failure_legend(ax)
     assert "support" in [t.get_text() for t in legend.get_texts()]
+
+
+def test_a_search_that_found_no_failure_is_not_titled_a_mechanism():
+    """Two blocks stacked on flat ground: the search grows the factor to 86.5
+    and finds no failure.  Its motion picture was titled 'Failure mechanism
+    at F = 86.4976' (found by fuzzing); it says there is none."""
+    ground = [(-5, -1), (5, -1), (5, 0), (-5, 0)]
+    low, high = [(0, 0), (2, 0), (2, 1), (0, 1)], [(0, 1), (2, 1), (2, 2), (0, 2)]
+    blocks = rd.Blocks.from_polygons([ground, low, high], fixed=[True, False, False])
+    fos = rd.factor_of_safety(rd.Model(blocks, rd.Joint(normal_stiffness=1e6, friction_angle=30)))
+    assert fos.mode == "no-failure"
+    for use in ("auto", "mechanism"):
+        title = plots.plot_deformed(fos, use=use).get_title()
+        assert "Failure mechanism" not in title
+    assert plots.plot_deformed(fos, use="mechanism").get_title().startswith("No failure mechanism")

@@ -172,6 +172,10 @@ def plot_deformed(
                 f"Deformed shape at {at}: displacements magnified x{mag:g} "
                 f"(largest {top:.3g} {unit})"
             )
+        elif a.stable:  # a search that found no failure (found by fuzzing: titled
+            # "Failure mechanism at F = 86.4976" for two blocks on flat ground)
+            F = format_factor(a.strength_factor)
+            title = f"No failure mechanism: equilibrium holds at F = {F}"
         else:
             title = (
                 f"Failure mechanism at F = {format_factor(a.strength_factor)}: how the blocks move "
