@@ -339,6 +339,8 @@ def _hostile(tmp_path: Path, case: str) -> Path:
     elif case == "fixed-apart":
         far = [(100, 0), (110, 0), (110, 5), (100, 5)]
         draw(tmp_path, path.name, fixed=[*p["fixed"], far])
+    elif case == "fixed-across":  # over the toe and beyond it (found by fuzzing)
+        draw(tmp_path, path.name, fixed=[*p["fixed"], [(20, 5), (30, 5), (30, -1), (20, -1)]])
     elif case == "water-turns-back":
         draw(tmp_path, path.name, water=[(0, 6), (12, 1), (8, 0), (24, -1)])
     elif case == "empty":
@@ -369,6 +371,7 @@ HOSTILE = {
     "arc": ("arcs (bulges)", "explode"),
     "spline": ("SPLINE", "not a line or polyline"),
     "fixed-apart": ("lies apart from the outline",),
+    "fixed-across": ("layer FIXED: LWPOLYLINE #", "crosses the outline", "inside the outline"),
     "water-turns-back": ("water table", "turns back at (8, 0)"),
     "empty": ("the file is empty",),
     "blank-drawing": ("no layer OUTLINE",),
@@ -393,6 +396,43 @@ def test_a_hostile_drawing_gives_exit_2_and_one_line(tmp_path, case):
         *HOSTILE[case],
     )
     assert line.count("error:") == 1
+
+
+def test_a_fixed_region_across_the_outline_is_refused_beside_or_along_it_is_not(tmp_path):
+    """Found by fuzzing: a FIXED rectangle over the toe, half outside the
+    outline, grew the ground into a 5 m wall beyond the drawn slope.  A region
+    beside the outline (sharing its edge) adds ground, one inside marks it;
+    one across its edge is refused, naming the entity and how far it reaches."""
+    p = parts()
+    across = draw(
+        tmp_path, "across.dxf", fixed=[*p["fixed"], [(20, 5), (30, 5), (30, -1), (20, -1)]]
+    )
+    handle = [e.dxf.handle for e in ezdxf.readfile(across).modelspace().query("*[layer=='FIXED']")]
+    refused(
+        invoke("import", across, "--out", tmp_path / "across.yaml"),
+        "across.dxf",
+        f"the fixed region (layer FIXED: LWPOLYLINE #{handle[-1]}) crosses the outline",
+        "it reaches 7.81 outside it, to (30, 5)",  # from the corner (24, 0)
+        "draw the FIXED region inside the outline",
+    )
+    assert not (tmp_path / "across.yaml").exists()
+    # beside (sharing the edge x = 24 or the face), overlapping it by round-off,
+    # inside along its edge or out by round-off: all read, at site coordinates too
+    eps = 1e-9
+    fine = {
+        "beside": [(24, -5), (30, -5), (30, 0), (24, 0)],
+        "beside-overlap": [(24 - eps, -5), (30, -5), (30, 0), (24 - eps, 0)],
+        "inside-along": [(22, -3), (24, -3), (24, 0), (22, 0)],
+        "inside-out-by-eps": [(20, -3), (24 + eps, -3), (24 + eps, 0), (20, 0)],
+        "beside-face": [(14, 0), (16, 0), (10, 10)],
+        "inside-face": [(14, 0), (10, 10), (10, 0)],
+    }
+    for name, region in fine.items():
+        for shift in ((0.0, 0.0), SITE):
+            move = [(x + shift[0], y + shift[1]) for x, y in region]
+            dxf = draw(tmp_path, f"{name}.dxf", shift=shift, fixed=[*parts(shift)["fixed"], move])
+            blocks = cut_section(read_section(dxf))
+            assert blocks.fixed.any() and blocks.n_free > 0, name
 
 
 def test_a_repaired_number_is_one_line_in_a_child_process(tmp_path):

@@ -223,6 +223,49 @@ def _closed_ring(xy: np.ndarray, closed: bool, source: str, layer: str, what: st
     return xy
 
 
+def _check_fixed_regions(
+    outline: np.ndarray, fixed: list[np.ndarray], found: list, source: str, layer: str
+) -> None:
+    """Refuse a fixed region that lies partly inside the outline and partly outside it.
+
+    A fixed region inside the outline marks part of the section as ground; one
+    beside it (sharing its edge) adds ground to it.  One across the outline's
+    edge is neither (found by fuzzing: a rectangle over the toe, half outside,
+    grew the ground into a 5 m wall beyond the drawn slope).  Within the
+    geometry tolerance (``GEOMETRY_RTOL`` of the size, as the cut uses) a region
+    along the outline's edge is inside or beside it.
+    """
+    import shapely
+
+    from ..blocks import GEOMETRY_RTOL
+
+    origin = outline.min(axis=0)  # about a local origin, as the cut is made
+    xy = np.vstack([outline, *fixed])
+    extent = float(np.hypot(*(xy.max(axis=0) - xy.min(axis=0))))
+    tol = GEOMETRY_RTOL * extent
+    rock = shapely.Polygon(outline - origin)
+    grown = shapely.buffer(rock, tol, join_style="mitre")
+    core = shapely.buffer(rock, -tol, join_style="mitre")
+    for ring, e in zip(fixed, found, strict=True):
+        region = shapely.Polygon(ring - origin)
+        if shapely.covered_by(region, grown) or shapely.intersection(region, core).area <= 0:
+            continue
+        out = shapely.difference(region, rock)
+        step = max(extent / 1000, shapely.length(out) / 1e5)  # the farthest point, to step/2
+        pts = shapely.points(shapely.get_coordinates(shapely.segmentize(out, step)))
+        far = shapely.distance(pts, rock)
+        k = int(np.argmax(far))
+        at = shapely.get_coordinates(pts[k])[0] + origin
+        raise _fail(
+            source,
+            f"the fixed region (layer {layer}: {_describe(e)}) crosses the outline: "
+            f"it reaches {far[k]:.3g} outside it, to {_pt(at)}",
+            "draw the FIXED region inside the outline (or beside it, sharing its edge, "
+            "to add ground there)",
+            "layers.fixed",
+        )
+
+
 def _check_simple_line(xy: np.ndarray, source: str, layer: str, e) -> None:
     import shapely
 

@@ -11,8 +11,8 @@ regard to case, as CAD programs do); by default:
     that the joints cut into blocks.
 ``FIXED``
     Fixed ground: closed polylines inside the outline or beside it (sharing
-    its edge).  Whatever of the section lies in them is immobile; every part
-    is one ground block.
+    its edge), not across it.  Whatever of the section lies in them is
+    immobile; every part is one ground block.
 ``JOINT_<name>`` (or ``JOINT-<name>``)
     Joint traces (LINE, LWPOLYLINE, POLYLINE) that take the joint ``<name>``
     of the model.  A trace that crosses a block from side to side cuts it; a
@@ -53,6 +53,7 @@ import numpy as np
 
 from .dxf_entities import (
     DxfError,
+    _check_fixed_regions,
     _check_simple_line,
     _closed_ring,
     _describe,
@@ -312,8 +313,8 @@ def read_section(
     ------
     DxfError
         A missing, empty or non-DXF file, an unknown layer, an open or
-        self-crossing outline, a self-crossing trace, arcs, a water table that
-        turns back, too many traces.
+        self-crossing outline, a fixed region across the outline's edge, a
+        self-crossing trace, arcs, a water table that turns back, too many traces.
     """
     path = Path(path)
     source = str(path)
@@ -377,6 +378,7 @@ def read_section(
             "draw the fixed ground (the rock below and behind the section) as closed polylines",
             "layers.fixed",
         )
+    _check_fixed_regions(outline, fixed, entities(roles["fixed"]), source, roles["fixed"])
 
     # -------------------------------------------------------------- joints
     traces = []
