@@ -134,7 +134,7 @@ def _root(
             envvar="ROCKDEM_MAX_BLOCKS",
             help="Refuse models of more blocks than this (a generated slope by its "
             "estimated size, before it is built). A factor of safety on 94,533 blocks "
-            "peaked at 5.4 GB.",
+            "peaked at 3.6 GB.",
             metavar="N",
         ),
     ] = MAX_BLOCKS,
