@@ -159,3 +159,91 @@ def test_gravity_from_scratch_needs_few_newton_iterations():
     a = rd.analyse(system)
     assert a.stable
     assert sum(step.evidence.iterations for step in a.steps) <= 80
+
+
+# ---------------------------------------------- active and passive blocks
+# Kovari & Fritz (1975) / Hoek & Bray (1981, "active and passive block"): an
+# active block on a steep plane pushes a passive block along a flat one
+# across a joint that here leans 20 degrees from the vertical (the seed
+# paper's wedge, above, has a vertical one).  Upper plane 50 deg, lower 15
+# deg, top at 8 m, face 60 deg, unit weight 25; c = 0.
+AP_UPPER, AP_LOWER, AP_LEAN, AP_TOP, AP_GAMMA = 50.0, 15.0, 20.0, 8.0, 25.0
+
+
+def _active_passive_corners():
+    up, low, lean = np.radians([AP_UPPER, AP_LOWER, AP_LEAN])
+    junction = np.zeros(2)  # where the joint meets both planes
+    back = np.array([-AP_TOP / np.tan(up), AP_TOP])  # upper plane at the top
+    head = np.array([AP_TOP * np.tan(lean), AP_TOP])  # the joint at the top
+    toe = 20.0 * np.array([np.cos(low), -np.sin(low)])  # lower plane at the face
+    crest = np.array([toe[0] - (AP_TOP - toe[1]) / np.tan(np.radians(60.0)), AP_TOP])
+    return junction, back, head, toe, crest
+
+
+def _active_passive_limit(phi: float) -> float:
+    """The factor F dividing tan(phi) on all three joints at which the two
+    blocks, each sliding on its plane (the active one along the upper plane,
+    the passive one along the lower; their relative slip along the joint from
+    the velocity triangle), are in limiting equilibrium: the force
+    directions of the three joints and the total weight are then linearly
+    dependent (a 4 x 4 determinant vanishes)."""
+    from scipy.optimize import brentq
+
+    junction, back, head, toe, crest = _active_passive_corners()
+
+    def area(*p):
+        x, y = np.array(p).T
+        return 0.5 * abs(x @ np.roll(y, -1) - y @ np.roll(x, -1))
+
+    w1, w2 = AP_GAMMA * area(junction, head, back), AP_GAMMA * area(junction, toe, crest, head)
+    up, low, lean = np.radians([AP_UPPER, AP_LOWER, AP_LEAN])
+    t1, n1 = np.array([np.cos(up), -np.sin(up)]), np.array([np.sin(up), np.cos(up)])
+    t2, n2 = np.array([np.cos(low), -np.sin(low)]), np.array([np.sin(low), np.cos(low)])
+    e3, n3 = np.array([np.sin(lean), np.cos(lean)]), np.array([-np.cos(lean), np.sin(lean)])
+    # velocity triangle: t1 = a2 t2 + a3 e3 (active relative to passive: a3 e3)
+    _, a3 = np.linalg.solve(np.column_stack([t2, e3]), t1)
+    s3 = np.sign(a3)
+
+    def matrix(F):
+        mu = np.tan(np.radians(phi)) / F
+        m = np.zeros((4, 4))
+        m[0:2, 0] = n1 - mu * t1  # upper plane on the active block
+        m[2:4, 1] = n2 - mu * t2  # lower plane on the passive block
+        m[0:2, 2] = n3 - s3 * mu * e3  # the joint, on each block
+        m[2:4, 2] = -(n3 - s3 * mu * e3)
+        m[0:2, 3] = (0.0, -w1)
+        m[2:4, 3] = (0.0, -w2)
+        return m
+
+    def det(F):
+        return np.linalg.det(matrix(F))
+
+    # the root at which the three normal forces press (N >= 0)
+    grid = np.geomspace(0.2, 10.0, 400)
+    sign = np.sign([det(F) for F in grid])
+    for k in np.flatnonzero(sign[1:] != sign[:-1]):
+        F = brentq(det, grid[k], grid[k + 1], xtol=1e-12)
+        m = matrix(F)
+        normal = np.linalg.lstsq(m[:, :3], -m[:, 3], rcond=None)[0]
+        if np.all(normal >= 0):
+            return F
+    raise AssertionError("no limit with compressive joints")
+
+
+@pytest.mark.parametrize("phi", [30.0, 25.0])
+def test_active_and_passive_blocks_across_a_leaning_joint(phi):
+    """The DEM's factor of safety matches the closed form within the search's
+    bracket width (measured: 1.5511 against 1.5510 at phi 30, 1.2527 against
+    1.2527 at phi 25)."""
+    junction, back, head, toe, crest = _active_passive_corners()
+    ground = [(-40.0, AP_TOP), back, junction, toe, (40.0, toe[1]), (40.0, -30.0), (-40.0, -30.0)]
+    blocks = rd.Blocks.from_polygons(
+        [ground, [junction, head, back], [junction, toe, crest, head]],
+        fixed=[True, False, False],
+        unit_weight=AP_GAMMA,
+    )
+    joint = rd.Joint(normal_stiffness=1e6, friction_angle=phi)
+    fos = rd.factor_of_safety(rd.Model(blocks, joint), width=0.002)
+    exact = _active_passive_limit(phi)
+    assert fos.bracket[0] - 1e-9 <= exact <= fos.bracket[1] + 1e-9, (fos, exact)
+    assert fos.value == pytest.approx(exact, abs=0.001)
