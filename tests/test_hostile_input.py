@@ -29,7 +29,8 @@ import rockdem as rd
 from _cli import assert_refused
 from _models import BOX, SLOPE
 from rockdem.config import ModelFileError, parse_model
-from rockdem.config.parse import MAX_DEPTH, MAX_FILE_BYTES, MAX_NODES
+from rockdem.config.parse import MAX_FILE_BYTES
+from rockdem.config.yaml_read import MAX_DEPTH, MAX_NODES
 from rockdem.geometry import JointSet, Profile, estimate_size, generate_slope, section_polygon
 
 TIME_LIMIT = 60  # seconds: a hang fails the test (each case takes 1-3 s)

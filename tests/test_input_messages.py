@@ -13,8 +13,7 @@ import pytest
 
 from _cli import assert_refused
 from _models import BOX, SLOPE
-from rockdem.config import ModelFileError, parse_document, parse_model
-from rockdem.config import parse as parse_module
+from rockdem.config import ModelFileError, parse_document, parse_model, yaml_read
 
 
 def _refused(text: str) -> str:
@@ -96,7 +95,7 @@ def test_a_missing_key_without_a_typo_is_still_named():
 def test_too_many_values_without_aliases_names_the_key(monkeypatch):
     """Found by fuzzing: a water table of 1.5 million points (no aliases at all)
     was blamed on "aliases that multiply (an alias bomb)"."""
-    monkeypatch.setattr(parse_module, "MAX_NODES", 1000)
+    monkeypatch.setattr(yaml_read, "MAX_NODES", 1000)
     points = ", ".join(f"[{i}, 1]" for i in range(400))
     text = BOX + f"loads:\n  water_unit_weight: 9.81\n  water_table: [{points}]\n"
     with pytest.raises(ModelFileError) as info:
@@ -107,7 +106,7 @@ def test_too_many_values_without_aliases_names_the_key(monkeypatch):
 
 
 def test_too_many_values_from_aliases_is_still_an_alias_bomb(monkeypatch):
-    monkeypatch.setattr(parse_module, "MAX_NODES", 1000)
+    monkeypatch.setattr(yaml_read, "MAX_NODES", 1000)
     lines = ["a0: &a0 [x, x, x, x, x, x, x, x, x]"]
     lines += [f"a{i}: &a{i} [{', '.join([f'*a{i - 1}'] * 9)}]" for i in range(1, 5)]
     with pytest.raises(ModelFileError) as info:
