@@ -147,8 +147,6 @@ def left_out(
     left out or analysed), ``pf_if_stable``, ``pf_if_failed`` (None for a
     sweep) and ``note`` (all of it in words; None when nothing was left out).
     """
-    import re
-
     errors = table[table["error"].notna()]
     n, done = len(errors), len(table)
     out: dict[str, Any] = {"n": n, "of": done, "reasons": [], "bias": None}
