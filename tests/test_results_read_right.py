@@ -827,3 +827,24 @@ def test_an_equilibrium_far_beyond_small_displacements_is_flagged():
         warnings.simplefilter("error", rd.ModelWarning)
         stiff = analysed(1e6)
     assert not any("small displacements" in t for t in trust_statements(stiff))
+
+
+def test_trust_notes_a_stiffness_contrast_between_joints():
+    """The perpendicular-joints example read FS 0.911 with equal stiffnesses
+    and 0.998 with one set 10 times stiffer: a contrast above 10 is stated in
+    'how far to trust this'; equal stiffnesses are not."""
+    from dataclasses import replace
+
+    from rockdem.trust import trust_statements
+
+    model = example("perpendicular-joints")
+    stiff = list(model.joints)
+    stiff[0] = replace(stiff[0], normal_stiffness=20 * stiff[0].normal_stiffness)
+    stiff[0] = replace(stiff[0], shear_stiffness=20 * stiff[0].shear_stiffness)
+
+    def noted(m):
+        return [t for t in trust_statements(rd.analyse(m)) if "stiffnesses differ" in t]
+
+    assert len(noted(model.replace(joints=stiff))) == 1
+    assert "up to 20 times" in noted(model.replace(joints=stiff))[0]
+    assert noted(model) == []

@@ -95,6 +95,7 @@ def trust_statements(a: Analysis, fos: FactorOfSafety | None = None) -> list[str
             break
     limit = fos.stable_analysis if fos is not None else None  # the state at the limit
     out += cohesion_lost_in_tension(limit if limit is not None else a)
+    out += stiffness_contrast(a)
     if a.system.model.loads.water_table:
         out.append(
             "Water acts on joints below the water table (hydrostatic, on both faces); free "
@@ -154,4 +155,29 @@ def cohesion_lost_in_tension(a: Analysis) -> list[str]:
         f"{share:.0%} with {settings.points_per_interface} {settings.quadrature} points), so "
         "the bond lost, and the result, depend on the number of spring points; where that "
         "bond matters, compare with another number of points per interface."
+    ]
+
+
+#: joints whose normal stiffnesses differ by more than this get a sentence
+#: (rockdem.joints refuses more than STIFFNESS_CONTRAST_MAX)
+CONTRAST_NOTED = 10.0
+
+
+def stiffness_contrast(a: Analysis) -> list[str]:
+    """A sentence when the joints in use differ in normal stiffness by more
+    than CONTRAST_NOTED times: a progressive failure's factor then depends on
+    the contrast (the perpendicular-joints example: 0.911 with equal
+    stiffnesses, 0.998 with one set 10 times stiffer, 0.805 with it 100
+    times softer)."""
+    from .joints import check_stiffness_contrast
+
+    system = a.system
+    contrast = check_stiffness_contrast(system.model.joints, system.interfaces.joint)
+    if contrast <= CONTRAST_NOTED:
+        return []
+    return [
+        f"The joints' normal stiffnesses differ by up to {contrast:.3g} times: with "
+        "non-associated friction the factor of safety of a progressive failure depends on "
+        "that contrast (an example slope: 0.911 with equal stiffnesses, 0.998 with one set "
+        "10 times stiffer); compare with equal stiffnesses."
     ]
