@@ -177,3 +177,21 @@ def test_a_corner_contact_is_one_line_and_exit_2(tmp_path):
     (tmp_path / "m.yaml").write_text(CORNER)
     r = CliRunner().invoke(app, ["check", str(tmp_path / "m.yaml")])
     assert_refused(r, "touches block 1 only at the point (1, 1)")
+
+
+@pytest.mark.parametrize(
+    ("section", "where"),
+    [
+        ("loads:\n  points:\n    - {at: [1, 1], force: [0, -10], name: crane}\n"
+         "    - {at: [1.5, 1], force: [0, -10], name: crane}\n", "loads.points[1].name"),
+        ("loads:\n  lines:\n    - {start: [0, 1], end: [1, 1], q: [0, -5], name: road}\n"
+         "    - {start: [1, 1], end: [2, 1], q: [0, -5], name: road}\n", "loads.lines[1].name"),
+        ("supports:\n  - {at: [2, 0.5], force: 100, angle: 180, name: prop}\n"
+         "  - {at: [2, 0.7], force: 100, angle: 180, name: prop}\n", "supports[1].name"),
+    ],
+)  # fmt: skip
+def test_two_loads_or_supports_of_one_name_are_refused(section, where):
+    """Loads and supports are listed by name as bolts are (their error
+    locations were kept by name too, the last one winning)."""
+    message = _refused(BOX + section)
+    assert where in message and "is already the name of" in message

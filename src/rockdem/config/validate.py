@@ -35,12 +35,15 @@ def validate_document(data: dict, *, source: str = "<string>", nodes: Any = None
 
 
 def _check_unique_names(cfg: ModelFile, source: str, nodes: Any) -> None:
-    """Bolts, stabilisation trials and stages are reported by name: two of one
-    name would be one row (found by fuzzing: two bolts named B1 were merged in
-    the results).  Empty names are not compared (an unnamed bolt is named by its
-    position)."""
+    """Bolts, loads, supports, stabilisation trials and stages are reported by
+    name: two of one name would be one row (found by fuzzing: two bolts named
+    B1 were merged in the results).  Empty names are not compared (an unnamed
+    bolt is named by its position)."""
     lists: list[tuple[Loc, list, str]] = [
         (("bolts",), cfg.bolts, "bolt"),
+        (("loads", "points"), cfg.loads.points, "point load"),
+        (("loads", "lines"), cfg.loads.lines, "line load"),
+        (("supports",), cfg.supports, "support"),
         (("stabilisation", "trials"), cfg.stabilisation.trials, "trial"),
         (("stabilisation", "stages"), cfg.stabilisation.stages, "stage"),
     ]
