@@ -11,7 +11,7 @@ program
 (``T, V``: the axial and shear forces of the bolts' crossings, within
 their capacities; :mod:`rockdem.bolts`)
 finds the largest multiple ``mu`` of the loads that such a force field can
-carry (HiGHS, through SciPy).  If ``mu < load_factor`` no solver can find
+carry (HiGHS's dual simplex, through highspy).  If ``mu < load_factor`` no solver can find
 equilibrium there: a rigorous proof of failure.  ``mu >= load_factor``
 proves nothing (friction without dilatancy can fail earlier), so it only
 confirms failures.
@@ -131,7 +131,7 @@ def admissible_load(
 
 
 def _max_load_multiple(op, bolt_part, scale_rows, load, cw, tan_phi, tension):
-    """The largest load multiple ``mu`` (HiGHS dual simplex, through SciPy), or None
+    """The largest load multiple ``mu`` (HiGHS dual simplex), or None
     and why not.
 
     The spring-point forces are written on the edges of their strength
@@ -171,19 +171,43 @@ def _max_load_multiple(op, bolt_part, scale_rows, load, cw, tan_phi, tension):
     rhs = -(scale @ (bn_t @ t_eff))  # the -T' part of N, moved to the right
     cost = np.zeros(A.shape[1])
     cost[-1] = -1.0
-    from scipy.optimize import linprog  # 0.15-0.3 s to import: only when an LP is solved
+    return _solve_lp(cost, A, rhs, np.concatenate(lo), np.concatenate(hi), A.shape[0])
 
-    res = linprog(
-        cost,
-        A_eq=A,
-        b_eq=rhs,
-        bounds=np.column_stack([np.concatenate(lo), np.concatenate(hi)]),
-        method="highs-ds",
-        options={"maxiter": _iteration_limit(A.shape[0])},
-    )
-    if res.status != 0:
-        return None, res.message
-    return float(res.x[-1]), "optimal"
+
+def _solve_lp(cost, A, rhs, lo, hi, rows):
+    """``min cost x`` with ``A x = rhs``, ``lo <= x <= hi`` by HiGHS's dual
+    simplex (highspy: imported in 15 ms, where SciPy's ``linprog`` took
+    0.15-0.3 s, a third of the two-block wedge's whole ``rockdem fos``).
+    Returns the last unknown, or None and why not."""
+    import highspy
+
+    # the bare solver class: the wrapper's constructor prints a banner on
+    # stdout before any option can silence it (it would break --json)
+    h = getattr(highspy, "_Highs", highspy.Highs)()
+    for option, value in (
+        ("output_flag", False),
+        ("solver", "simplex"),
+        ("simplex_strategy", 1),  # dual
+        ("simplex_iteration_limit", _iteration_limit(rows)),
+        ("threads", 1),
+    ):
+        h.setOptionValue(option, value)
+    lp = highspy.HighsLp()
+    lp.num_row_, lp.num_col_ = A.shape
+    lp.col_cost_ = cost
+    lp.col_lower_ = lo
+    lp.col_upper_ = np.minimum(hi, highspy.kHighsInf)
+    lp.row_lower_ = lp.row_upper_ = rhs
+    lp.a_matrix_.format_ = highspy.MatrixFormat.kColwise
+    lp.a_matrix_.start_ = A.indptr
+    lp.a_matrix_.index_ = A.indices
+    lp.a_matrix_.value_ = A.data
+    h.passModel(lp)
+    h.run()
+    status = h.getModelStatus()
+    if status != highspy.HighsModelStatus.kOptimal:
+        return None, h.modelStatusToString(status)
+    return float(h.getSolution().col_value[-1]), "optimal"
 
 
 def _iteration_limit(rows: int) -> int:
