@@ -559,3 +559,32 @@ def test_a_factor_of_safety_below_smallest_that_was_reached_is_found():
     fos = rd.factor_of_safety(model)
     assert fos.mode == "strength"
     assert fos.value == pytest.approx(np.tan(np.radians(1)) / np.tan(np.radians(20)), rel=0.005)
+
+
+@pytest.mark.parametrize("model", ["wedge", "toppling"])
+def test_a_deferred_mechanism_is_the_one_analyse_shows(model):
+    """The factor-of-safety search analyses a slope that fails under gravity
+    without showing its mechanism (dynamic relaxation), which it rarely
+    reports; shown later, the failure reads as ``analyse`` reports it: the
+    wedge of seed paper Eq. 7 (phi 35 / 30: F = +2.64 t, unstable) and a
+    block that topples (b/h = 0.9 tan psi, Goodman & Bray)."""
+    from rockdem.analysis import show_mechanism
+
+    if model == "wedge":
+        m = V.two_block_wedge(35, 30)
+    else:
+        m = V.toppling_block(25.0, 0.9 * np.tan(np.radians(25.0)) * 2.0, 2.0)
+    system = rd.build_system(m)
+    now = rd.analyse(system)
+    deferred = rd.analyse(system, show_mechanism=False)
+    assert deferred.failure_start is not None and deferred.evidence.relaxation is None
+    later = show_mechanism(system, deferred)
+    assert later.failure_start is None and now.failure_start is None
+    assert vars(later.evidence) == vars(now.evidence)
+    assert later.evidence.relaxation is not None
+    np.testing.assert_array_equal(later.unstable, now.unstable)
+    np.testing.assert_array_equal(later.mechanism, now.mechanism)
+    np.testing.assert_array_equal(later.slip_surface, now.slip_surface)
+    assert later.limit_interfaces is None or np.array_equal(
+        later.limit_interfaces.state, now.limit_interfaces.state
+    )

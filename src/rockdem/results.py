@@ -220,6 +220,11 @@ class Analysis:
         unloaded state (so valid at that factor whatever this analysis's):
         a staged analysis at that factor starts its first step there
         (``analyse(start=...)``) instead of from scratch.
+    failure_start : (SpringState, ndarray, float) or None
+        For a proven failure whose mechanism was not yet shown
+        (``analyse(show_mechanism=False)``): the committed state, free-dof
+        displacements and load factor it failed from, for
+        :func:`rockdem.analysis.show_mechanism`.
     """
 
     system: System
@@ -236,6 +241,7 @@ class Analysis:
     state: SpringState = field(repr=False)
     limit_interfaces: InterfaceResults | None = field(default=None, repr=False)
     unloaded_limit: tuple[float, float, np.ndarray] | None = field(default=None, repr=False)
+    failure_start: tuple[SpringState, np.ndarray, float] | None = field(default=None, repr=False)
 
     @property
     def unstable_blocks(self) -> np.ndarray:

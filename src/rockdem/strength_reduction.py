@@ -16,7 +16,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from .analysis import _evidence, _package, _settle, analyse
+from .analysis import _evidence, _package, _settle, analyse, show_mechanism
 from .certificate import prove_failed_trial
 from .errors import InputError, check_number
 from .mechanism import relaxation_mechanism
@@ -129,7 +129,7 @@ def factor_of_safety(
 
     # 1. the staged gravity state at the starting factor (fresh, in load steps)
     F = start
-    first = analyse(system, strength_factor=F, prove_first=False)
+    first = analyse(system, strength_factor=F, prove_first=False, show_mechanism=False)
     record(F, first)
     lo_an: Analysis | None = first if first.stable else None
     hi_an: Analysis | None = None if first.stable else first
@@ -155,10 +155,10 @@ def factor_of_safety(
                 "strength-independent",
                 tuple(trials),
                 None,
-                hi_an,
+                show_mechanism(system, hi_an),
                 _DEFINITION,
             )
-        a = analyse(system, strength_factor=F, start=start, prove_first=False)
+        a = analyse(system, strength_factor=F, start=start, prove_first=False, show_mechanism=False)
         record(F, a)
         if a.stable:
             lo_an = a
@@ -268,7 +268,7 @@ def factor_of_safety(
         hi = moved_at if moved_at is not None else hi
         break
     if hi_an is not None:  # how the contacts stood as failure began
-        hi_an = replace(hi_an, limit_interfaces=lo_an.interfaces)
+        hi_an = replace(show_mechanism(system, hi_an), limit_interfaces=lo_an.interfaces)
     return FactorOfSafety(
         0.5 * (lo + hi), (lo, hi), "strength", tuple(trials), lo_an, hi_an, _DEFINITION
     )
