@@ -22,6 +22,7 @@ from rockdem.certificate import admissible_load
 from rockdem.config import load_model
 from rockdem.examples import example_path
 from rockdem.spring_law import SpringState
+from rockdem.trust import trust_statements
 
 pytestmark = pytest.mark.filterwarnings("ignore::DeprecationWarning")
 
@@ -588,3 +589,25 @@ def test_a_deferred_mechanism_is_the_one_analyse_shows(model):
     assert later.limit_interfaces is None or np.array_equal(
         later.limit_interfaces.state, now.limit_interfaces.state
     )
+
+
+@pytest.mark.slow
+def test_the_lp_bounds_a_limit_that_newton_stalls_below():
+    """The 2,322-block family slope (FS = tan phi / tan dip = 1.4866, Hoek &
+    Bray planar sliding): Newton stalls about 0.6% below the limit and
+    dynamic relaxation confirms failure only 2% beyond that.  The
+    equilibrium LP, bisected between the two, bounds the limit from above
+    within 0.1%: the limit lies between the equilibrium found and that
+    bound, and the value (Newton's, the conservative end) is unchanged."""
+    model, dip, phi = _sized_family(10)
+    exact = np.tan(np.radians(phi)) / np.tan(np.radians(dip))
+    fos = rd.factor_of_safety(model)
+    lo, hi = fos.bracket
+    assert fos.proof == "dynamic-relaxation" and hi < exact  # the stall this is about
+    assert fos.lp_bound is not None and fos.certified_upper_bound == fos.lp_bound
+    assert lo <= exact <= fos.lp_bound < fos.confirmed_upper_bound
+    assert fos.lp_bound <= exact * 1.001
+    assert fos.value == pytest.approx(0.5 * (lo + hi))
+    said = " ".join(trust_statements(fos.stable_analysis, fos))
+    assert f"Rigorous upper bound (equilibrium LP): F <= {fos.lp_bound:.4f}" in said
+    assert f"limit lies between {lo:.4f} and {fos.lp_bound:.4f}" in said

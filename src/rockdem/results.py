@@ -341,6 +341,10 @@ class FactorOfSafety:
     stable_analysis, failed_analysis : Analysis
         The state at the lower end of the bracket and the mechanism at the
         upper end.
+    lp_bound : float or None
+        Where the upper end is not proven: the smallest factor, up to where
+        failure is confirmed, at which the equilibrium LP proves failure
+        (:func:`rockdem.certificate.upper_bound`), or None.
     """
 
     value: float | None
@@ -350,6 +354,7 @@ class FactorOfSafety:
     stable_analysis: Analysis | None
     failed_analysis: Analysis | None
     definition: str
+    lp_bound: float | None = None
 
     @property
     def proof(self) -> str | None:
@@ -371,6 +376,8 @@ class FactorOfSafety:
             for t in self.trials
             if not t.stable and t.evidence.certified and t.evidence.certified_at is not None
         ]
+        if self.lp_bound is not None:
+            bounds.append(self.lp_bound)
         return min(bounds) if bounds else None
 
     @property

@@ -17,7 +17,7 @@ from dataclasses import replace
 import numpy as np
 
 from .analysis import _evidence, _package, _settle, analyse, show_mechanism
-from .certificate import prove_failed_trial
+from .certificate import prove_failed_trial, upper_bound
 from .errors import InputError, check_number
 from .mechanism import relaxation_mechanism
 from .model import Model
@@ -267,10 +267,16 @@ def factor_of_safety(
         hi_an = relaxation_mechanism(system, hi_an, shown)
         hi = moved_at if moved_at is not None else hi
         break
+    bound = None
+    if hi_an is not None and not hi_an.evidence.certified:
+        # the top is confirmed at best: bound the limit from above with the LP,
+        # up to where failure is confirmed (or the last margin tried)
+        top = hi_an.evidence.confirmed_at or hi * (1.0 + CONFIRM_MARGINS[-1])
+        bound = upper_bound(system, lo_an.state, hi_an, hi, max(top, hi))
     if hi_an is not None:  # how the contacts stood as failure began
         hi_an = replace(show_mechanism(system, hi_an), limit_interfaces=lo_an.interfaces)
     return FactorOfSafety(
-        0.5 * (lo + hi), (lo, hi), "strength", tuple(trials), lo_an, hi_an, _DEFINITION
+        0.5 * (lo + hi), (lo, hi), "strength", tuple(trials), lo_an, hi_an, _DEFINITION, bound
     )
 
 

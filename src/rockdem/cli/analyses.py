@@ -393,9 +393,10 @@ def _print_fos(doc: dict[str, Any]) -> None:
             out.print(f"rigorous upper bound (equilibrium LP): {doc['certified_upper_bound']:.4f}")
         top = doc.get("confirmed_upper_bound")
         if top is not None and top > hi:
+            cap = min(top, doc.get("certified_upper_bound") or top)
             out.print(
-                f"failure confirmed at F = {top:.4f}; between {hi:.4f} and {top:.4f} it is "
-                f"neither proven nor confirmed (the limit lies below {top:.4f})"
+                f"failure confirmed at F = {top:.4f}; between {hi:.4f} and {cap:.4f} it is "
+                f"neither proven nor confirmed (the limit lies below {cap:.4f})"
             )
     elif doc["mode"] == "no-failure":
         out.print(
