@@ -82,7 +82,8 @@ def measure(doc, spec, repeat: int) -> dict:
     from dask.distributed import Client, LocalCluster
 
     import rockdem
-    from rockdem.studies.run import _args, evaluate, prepare
+    from rockdem.studies.plan import prepare
+    from rockdem.studies.run import _args, evaluate
 
     plan = prepare(doc, spec)
     n = len(plan.values)

@@ -28,7 +28,7 @@ from _cli import assert_refused as refused
 from rockdem.cli import app
 from rockdem.config import load_model
 from rockdem.studies import sampling
-from rockdem.studies.run import prepare
+from rockdem.studies.plan import prepare
 from rockdem.studies.spec import StudySpec
 from rockdem.studies.stats import pf_interval
 from rockdem.verification import sliding_fos

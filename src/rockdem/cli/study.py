@@ -102,7 +102,8 @@ def study(
     """
     with _guard(debug):
         from ..errors import InputError
-        from ..studies.run import Progress, prepare
+        from ..studies.plan import prepare
+        from ..studies.run import Progress
         from ..studies.run import study as run_study
 
         if scheduler is not None and workers is not None:

@@ -7,7 +7,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from ..result_tables import jsonable
-from .run import Plan, sample_document
+from .plan import Plan, sample_document
 from .store import _atomic_write, worst_digest
 
 

@@ -1,5 +1,5 @@
-"""Running a study: the plan (inputs resolved, samples drawn, the nominal model
-checked), one sample per Dask task, rows stored as they arrive, the summary.
+"""Running a study: one sample per Dask task (the plan: :mod:`.plan`), rows
+stored as they arrive, the summary.
 
 The task (:func:`evaluate`) gets the parsed model file and the values of one
 sample, sets them at their key paths in a copy, validates and builds the model
@@ -10,8 +10,6 @@ through :mod:`rockdem.config` and runs :func:`rockdem.factor_of_safety` (or
 
 from __future__ import annotations
 
-import copy
-import hashlib
 import json
 import os
 import socket
@@ -23,11 +21,11 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from ..config.errors import Loc, ModelFileError, _line
+from ..config.errors import Loc
 from ..errors import InputError
 from ..geometry.size import MAX_BLOCKS
-from . import keypath, sampling
-from .spec import StudySpec
+from . import keypath
+from .plan import Plan, prepare, sample_values
 from .store import Store
 
 #: What ``pip`` needs for a study.
@@ -64,156 +62,7 @@ class Progress:
         return self.failed / self.ok if self.ok else None
 
 
-@dataclass
-class Plan:
-    """A study ready to run."""
-
-    source: str
-    base: dict  # the parsed model file without its study section
-    spec: StudySpec
-    places: list[list[Loc]]  # where each input is set
-    values: np.ndarray  # samples x inputs
-    fingerprint: str
-    max_blocks: int | None = MAX_BLOCKS
-    nominal: Any = None  # the Model with every input at its median (a sweep: first point)
-
-    @property
-    def names(self) -> list[str]:
-        return self.spec.names
-
-    def manifest(self) -> dict:
-        from .. import __version__
-
-        return {
-            "rockdem_version": __version__,
-            "model_file": self.source,
-            "fingerprint": self.fingerprint,
-            "kind": self.spec.kind,
-            "samples": len(self.values),
-            "inputs": self.names,
-            "study": self.spec.model_dump(mode="json", exclude_defaults=False),
-        }
-
-
-# ================================================================ the plan
-def _read_model(model) -> tuple[dict, Any, str]:
-    from ..config import read_document
-
-    if isinstance(model, str | os.PathLike):
-        data, nodes = read_document(model)
-        return data, nodes, str(model)
-    if isinstance(model, dict):
-        return copy.deepcopy(model), None, "<model>"
-    raise InputError(
-        "study model",
-        f"is a {type(model).__name__}",
-        "give the model file's path (or its parsed content as a dict): the inputs are "
-        "varied by their key paths in the file",
-    )
-
-
-class _StudyOnly:
-    """Validation of a study section alone, with the model file's messages."""
-
-    @staticmethod
-    def validate(data: Any, source: str, nodes: Any) -> StudySpec:
-        from pydantic import ValidationError
-
-        from ..config.validate import _from_validation
-        from ..config.values import _Section
-
-        class StudySection(_Section):
-            study: StudySpec
-
-        try:
-            return StudySection.model_validate({"study": data}).study
-        except ValidationError as exc:
-            raise _from_validation(exc, source, nodes) from None
-
-
-def prepare(model, spec=None, *, max_blocks: int | None = MAX_BLOCKS) -> Plan:
-    """Read the model, validate the study, resolve the key paths, draw the samples and
-    check the model with every input at its median (a bad study fails here, in one
-    line, before any run)."""
-    from ..config import build_model, read_document, validate_document
-
-    data, nodes, source = _read_model(model)
-    study_data, study_nodes, study_source = data.pop("study", None), nodes, source
-    cfg = validate_document(data, source=source, nodes=nodes)
-    if isinstance(spec, StudySpec):
-        parsed = spec
-    else:
-        if isinstance(spec, str | os.PathLike):
-            doc, study_nodes = read_document(spec)
-            study_source = str(spec)
-            if set(doc) != {"study"}:
-                extra = sorted(set(doc) - {"study"})
-                raise ModelFileError(
-                    study_source,
-                    extra[0] if extra else "study",
-                    "unknown key" if extra else "required key is missing",
-                    "a study file holds one `study:` section",
-                )
-            study_data = doc["study"]
-        elif isinstance(spec, dict):
-            study_data, study_nodes, study_source = spec, None, "<study>"
-        elif spec is not None:
-            raise InputError("study spec", f"is a {type(spec).__name__}", "give a dict or a file")
-        if study_data is None:
-            raise ModelFileError(
-                source,
-                "study",
-                "the model file has no `study:` section",
-                "add one (docs/file-format.md, `study`) or give the study separately",
-            )
-        parsed = _StudyOnly.validate(study_data, study_source, study_nodes)
-    section = "inputs" if parsed.kind == "probabilistic" else "sweep"
-    places = keypath.check_paths(data, parsed.names, section, study_source, study_nodes)
-    try:
-        values = sampling.samples(parsed)
-    except ValueError as exc:  # contradictory correlations
-        loc = ("study", "correlations")
-        raise ModelFileError(
-            study_source,
-            "study.correlations",
-            str(exc),
-            "lower some of them",
-            _line(study_nodes, loc),
-        ) from None
-    whole = [keypath.is_integer_key(locs[0]) for locs in places]
-    for k, is_int in enumerate(whole):
-        if is_int:
-            values[:, k] = np.round(values[:, k])
-    # the nominal model: every input at its median (a sweep: its first point)
-    nominal = sampling.medians(parsed)
-    nominal = [round(v) if w else float(v) for v, w in zip(nominal, whole, strict=True)]
-    if cfg.name is None and isinstance(model, str | os.PathLike):
-        data["name"] = Path(model).stem  # as load_model names it
-    doc = keypath.apply(data, places, nominal)
-    where = f"{source} (study inputs at their medians)"
-    ncfg = validate_document(doc, source=where)
-    nominal_model = build_model(ncfg, source=where, max_blocks=max_blocks)
-    key = {
-        "model": data,
-        "study": parsed.model_dump(mode="json", exclude={"worst", "confidence"}),
-    }
-    text = json.dumps(key, sort_keys=True, default=str, allow_nan=True)
-    fingerprint = hashlib.sha256(text.encode()).hexdigest()
-    return Plan(source, data, parsed, places, values, fingerprint, max_blocks, nominal_model)
-
-
 # ================================================================ one sample
-def _value(v: float, whole: bool):
-    return int(v) if whole else float(v)
-
-
-def sample_document(plan: Plan, sample: int) -> dict:
-    """The model file of one sample (parsed data, without the study section)."""
-    whole = [keypath.is_integer_key(locs[0]) for locs in plan.places]
-    vals = [_value(v, w) for v, w in zip(plan.values[sample], whole, strict=True)]
-    return keypath.apply(plan.base, plan.places, vals)
-
-
 def evaluate(
     base: dict,
     source: str,
@@ -281,14 +130,12 @@ def _error_row(plan: Plan, sample: int, error: str) -> dict:
 
 # ================================================================ executors
 def _args(plan: Plan, sample: int, base) -> tuple:
-    whole = [keypath.is_integer_key(locs[0]) for locs in plan.places]
-    vals = [_value(v, w) for v, w in zip(plan.values[sample], whole, strict=True)]
     return (
         base,
         plan.source,
         plan.places,
         plan.names,
-        vals,
+        sample_values(plan, sample),
         plan.spec.compute,
         sample,
         plan.max_blocks,
