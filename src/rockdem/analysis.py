@@ -402,7 +402,7 @@ def analyse(
 #: the mean block size, or a block turns more than this many radians, is
 #: beyond the small displacements the method assumes (a 10,000-block brick
 #: slope standing under gravity: joints slid up to 0.06 block sizes, turned
-#: 0.002 rad; with the 10,000-block slope's joint stiffness, the 94,533-block
+#: 0.002 rad; with the 1,000-block slope's joint stiffness, the 94,533-block
 #: slope's back column slid 0.57 block sizes past the fixed boundary: it fired,
 #: as it should).  (Not the blocks' own translations: on a 94,533-block slope
 #: the elastic settlement under gravity is 0.7 block sizes, every joint's
