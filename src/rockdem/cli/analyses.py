@@ -394,9 +394,12 @@ def _print_fos(doc: dict[str, Any]) -> None:
         top = doc.get("confirmed_upper_bound")
         if top is not None and top > hi:
             cap = min(top, doc.get("certified_upper_bound") or top)
+            known = f"failure confirmed at F = {top:.4f}"
+            if cap < top:
+                known = f"failure proven from F = {cap:.4f} (LP) and confirmed at {top:.4f}"
             out.print(
-                f"failure confirmed at F = {top:.4f}; between {hi:.4f} and {cap:.4f} it is "
-                f"neither proven nor confirmed (the limit lies below {cap:.4f})"
+                f"{known}; between {hi:.4f} and {cap:.4f} it is neither proven nor confirmed "
+                f"(the limit lies below {cap:.4f})"
             )
     elif doc["mode"] == "no-failure":
         out.print(
