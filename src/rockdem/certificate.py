@@ -184,12 +184,14 @@ def _solve_lp(cost, A, rhs, lo, hi, rows):
     # the bare solver class: the wrapper's constructor prints a banner on
     # stdout before any option can silence it (it would break --json)
     h = getattr(highspy, "_Highs", highspy.Highs)()
+    # (no "threads": HiGHS keeps one thread pool per process, and a run asking
+    # for another size than the process's other HiGHS users fails; the dual
+    # simplex is serial anyway)
     for option, value in (
         ("output_flag", False),
         ("solver", "simplex"),
         ("simplex_strategy", 1),  # dual
         ("simplex_iteration_limit", _iteration_limit(rows)),
-        ("threads", 1),
     ):
         h.setOptionValue(option, value)
     lp = highspy.HighsLp()
@@ -203,7 +205,8 @@ def _solve_lp(cost, A, rhs, lo, hi, rows):
     lp.a_matrix_.index_ = A.indices
     lp.a_matrix_.value_ = A.data
     h.passModel(lp)
-    h.run()
+    if h.run() == highspy.HighsStatus.kError:
+        return None, "HiGHS stopped with an error"
     status = h.getModelStatus()
     if status != highspy.HighsModelStatus.kOptimal:
         return None, h.modelStatusToString(status)
@@ -230,7 +233,7 @@ def upper_bound(system, state, failed, lo: float, hi: float, solves: int = BOUND
     second solver checks a stall above 20,000 unknowns) the LP still bounds
     the factor of safety from above: a 2,322-block planar-sliding slope
     (exact 1.4866) stalled at 1.4781, confirmed only at 1.5076; the LP
-    proves failure from 1.4881.  With non-associated friction (toppling)
+    proves failure from 1.4873.  With non-associated friction (toppling)
     the LP's edge can lie far above the limit: then it proves nothing in
     the range and costs one LP.  On models too large for the LP, the moving
     blocks' equations alone (``failed.unstable``) still prove it.
@@ -246,7 +249,7 @@ def upper_bound(system, state, failed, lo: float, hi: float, solves: int = BOUND
 
     if not proves(hi):
         return None
-    for _ in range(solves - 1):
+    for _ in range(solves - 1 if lo < hi else 0):
         mid = 0.5 * (lo + hi)
         if proves(mid):
             hi = mid

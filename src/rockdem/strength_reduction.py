@@ -149,13 +149,14 @@ def factor_of_safety(
         if F < smallest and from_reached and below_smallest < RESTARTS:
             below_smallest += 1
         elif F < smallest:
+            hi_an, trials = _shown(system, hi_an, trials)
             return FactorOfSafety(
                 None,
                 (0.0, hi_an.strength_factor),
                 "strength-independent",
                 tuple(trials),
                 None,
-                show_mechanism(system, hi_an),
+                hi_an,
                 _DEFINITION,
             )
         a = analyse(system, strength_factor=F, start=start, prove_first=False, show_mechanism=False)
@@ -274,7 +275,8 @@ def factor_of_safety(
         top = hi_an.evidence.confirmed_at or hi * (1.0 + CONFIRM_MARGINS[-1])
         bound = upper_bound(system, lo_an.state, hi_an, hi, max(top, hi))
     if hi_an is not None:  # how the contacts stood as failure began
-        hi_an = replace(show_mechanism(system, hi_an), limit_interfaces=lo_an.interfaces)
+        hi_an, trials = _shown(system, hi_an, trials)
+        hi_an = replace(hi_an, limit_interfaces=lo_an.interfaces)
     return FactorOfSafety(
         0.5 * (lo + hi), (lo, hi), "strength", tuple(trials), lo_an, hi_an, _DEFINITION, bound
     )
@@ -286,6 +288,18 @@ _DEFINITION = (
     "of the largest stable F, with the shear springs following the total relative displacement "
     "(monotonic strength reduction, no slip history)"
 )
+
+
+def _shown(system: System, failed: Analysis, trials: list[Trial]):
+    """``failed`` with its mechanism shown, if it was a start analysis that
+    deferred it, and the trial list with that trial's evidence updated."""
+    if failed.failure_start is None:
+        return failed, trials
+    before = failed.evidence
+    failed = show_mechanism(system, failed)
+    return failed, [
+        replace(t, evidence=failed.evidence) if t.evidence is before else t for t in trials
+    ]
 
 
 def _continue(
