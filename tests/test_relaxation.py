@@ -308,3 +308,31 @@ def test_an_undecided_staged_failure_goes_on_while_the_budget_allows(monkeypatch
     failed = rd.analyse(system, strength_factor=1.1 * fs)
     assert len(starts) == 3 and not np.array_equal(starts[2], starts[1])
     assert failed.verdict == "unstable" and "mechanism" in failed.evidence.relaxation
+
+
+def test_a_run_that_moved_only_the_first_blocks_shows_newtons_mechanism(monkeypatch):
+    """The run that shows a proven mechanism is 2,000 explicit steps at any
+    size: on a 28,556-block brick slope (planar sliding at tan 35 / tan 20,
+    Hoek & Bray) it had clearly moved 6 face blocks, while the 13,703 blocks
+    above a bedding plane slide (Newton's mechanism).  On models above
+    20,000 unknowns (no stall check there) a run that moved fewer than a
+    tenth of Newton's blocks, and none outside them, yields to Newton's; on
+    smaller models, or where it moved other blocks, the run decides."""
+    from rockdem import continuation
+    from rockdem.mechanism import first_movers
+
+    system = rd.build_system(V.brick_slope(100))
+    newton = ~system.blocks.fixed
+    free = np.flatnonzero(newton)
+    few = np.zeros_like(newton)
+    few[free[:3]] = True
+    assert len(free) >= 40
+    assert not first_movers(system, few, newton)  # small: the run decides
+    monkeypatch.setattr(continuation, "stall_checked", lambda n_dof: False)
+    assert first_movers(system, few, newton)
+    narrower = newton.copy()
+    narrower[free[:3]] = False  # the run moved blocks Newton's mechanism does not hold
+    assert not first_movers(system, few, narrower)
+    many = np.zeros_like(newton)
+    many[free[: len(free) // 5]] = True  # a fifth of them: a mechanism of its own
+    assert not first_movers(system, many, newton)
