@@ -24,7 +24,7 @@ from .sections import (
 )
 from .settings import AnalysisSpec, StabilisationSpec
 from .study import StudySpec
-from .values import _Section
+from .values import _Section, document_keys
 
 #: Version of the file format this module reads (the ``format`` key).
 FORMAT_VERSION = 1
@@ -113,6 +113,7 @@ class ModelFile(_Section):
 
 def json_schema() -> dict:
     """The JSON Schema of the model file (for editors), generated from :class:`ModelFile`."""
+    document_keys()
     schema = ModelFile.model_json_schema()
     schema["$schema"] = "https://json-schema.org/draft/2020-12/schema"
     schema["$id"] = "https://rockdem.invalid/schema/rockdem-model.schema.json"

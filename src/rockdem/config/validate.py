@@ -14,6 +14,7 @@ from pydantic.fields import FieldInfo
 
 from .errors import Loc, ModelFileError, _keypath, _kind, _line
 from .spec import ModelFile
+from .values import document_keys
 
 
 def validate_document(data: dict, *, source: str = "<string>", nodes: Any = None) -> ModelFile:
@@ -160,6 +161,7 @@ def _range(loc: Loc, kind: str, bound: Any) -> str:
 
 
 def _field_doc(loc: Loc) -> str:
+    document_keys()
     parent = _type_at(loc[:-1])
     if isinstance(parent, type) and issubclass(parent, BaseModel):
         field = parent.model_fields.get(str(loc[-1]))

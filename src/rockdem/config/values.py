@@ -14,6 +14,7 @@ runs for ever.
 
 from __future__ import annotations
 
+import functools
 import re
 from typing import Annotated, Any
 
@@ -155,6 +156,83 @@ Direction = bounded(-360.0, 360.0)
 
 
 class _Section(BaseModel):
-    """Base of every section: unknown keys are errors, every key documented."""
+    """Base of every section: unknown keys are errors, every key documented.
 
-    model_config = ConfigDict(extra="forbid", use_attribute_docstrings=True, defer_build=True)
+    A key's documentation is the string under it in the class body; it is
+    read on demand (:func:`document_keys`: error messages, the JSON Schema),
+    not at import, where pydantic's ``use_attribute_docstrings`` parses the
+    source of every section (50-60 ms of every command's start-up).
+    """
+
+    model_config = ConfigDict(extra="forbid", defer_build=True)
+
+
+def _attribute_docs(cls: type) -> dict[str, str]:
+    """``{key: its docstring}`` of the keys declared in ``cls``'s own body:
+    a string statement right after an annotated assignment (pydantic's rule
+    for ``use_attribute_docstrings``)."""
+    import ast
+    import inspect
+    import textwrap
+
+    tree = ast.parse(textwrap.dedent(inspect.getsource(cls)))
+    docs, target = {}, None
+    for node in tree.body[0].body:
+        if isinstance(node, ast.AnnAssign) and isinstance(node.target, ast.Name):
+            target = node.target.id
+            continue
+        if (
+            target is not None
+            and isinstance(node, ast.Expr)
+            and isinstance(node.value, ast.Constant)
+            and isinstance(node.value.value, str)
+        ):
+            docs[target] = inspect.cleandoc(node.value.value)
+        target = None
+    return docs
+
+
+@functools.cache
+def document_keys() -> None:
+    """Give every section's keys their docstrings as descriptions (once), and
+    rebuild the sections' schemas so that the JSON Schema carries them."""
+    import inspect
+
+    sections, todo = [], [_Section]
+    while todo:
+        cls = todo.pop()
+        sections.append(cls)
+        todo.extend(cls.__subclasses__())
+    own = {cls: _attribute_docs(cls) for cls in sections}
+    for cls in sections:
+        for name, field in cls.model_fields.items():
+            if field.description is not None:
+                continue
+            # the class that declares the key (the nearest in the MRO)
+            owner = next(c for c in cls.__mro__ if name in inspect.get_annotations(c))
+            if owner in own and name in own[owner]:
+                field.description = own[owner][name]
+    # rebuilt inner sections first: an outer one takes an inner one's schema
+    # as it was built (a default instance builds it at import)
+    done: set[type] = set()
+
+    def rebuild(cls: type) -> None:
+        if cls in done:
+            return
+        done.add(cls)
+        for field in cls.model_fields.values():
+            for inner in _section_types(field.annotation):
+                rebuild(inner)
+        cls.model_rebuild(force=True)
+
+    for cls in sections:
+        rebuild(cls)
+
+
+def _section_types(annotation) -> list[type]:
+    """The section classes an annotation refers to (in unions, lists, ...)."""
+    import typing
+
+    if isinstance(annotation, type) and issubclass(annotation, _Section):
+        return [annotation]
+    return [t for arg in typing.get_args(annotation) for t in _section_types(arg)]
