@@ -15,7 +15,7 @@ import pytest
 from typer.testing import CliRunner
 
 import rockdem as rd
-from _cli import assert_refused as refused
+from _cli import assert_refused
 from rockdem.cli import app
 from rockdem.config import load_model, parse_model
 from rockdem.exchange.dxf_cut import cut_section
@@ -247,7 +247,7 @@ def test_import_prints_the_model_without_out_and_refuses_to_overwrite(tmp_path):
     assert "placeholders" in r.stderr  # no template: the joint properties must be edited
     out = tmp_path / "m.yaml"
     assert invoke("import", dxf, "-o", out).exit_code == 0
-    refused(invoke("import", dxf, "-o", out), "exists already", "--overwrite")
+    assert_refused(invoke("import", dxf, "-o", out), "exists already", "--overwrite")
     assert invoke("import", dxf, "-o", out, "--overwrite").exit_code == 0
 
 
@@ -263,7 +263,7 @@ def test_a_bad_value_in_the_template_is_named_in_the_template(tmp_path, bad, fra
     template = tmp_path / "model.yaml"
     template.write_text(MODEL.replace(bad, fragment))
     out = tmp_path / "m.yaml"
-    line = refused(invoke("import", dxf, "-t", template, "-o", out), "joints.cross.")
+    line = assert_refused(invoke("import", dxf, "-t", template, "-o", out), "joints.cross.")
     assert line.startswith(f"error: {template}:5: joints.cross.")
     assert not out.exists()
 
@@ -273,7 +273,7 @@ def test_an_error_from_the_drawing_is_named_at_the_drawing(tmp_path):
     "<import>:13" (a line of the model not written) instead of the drawing."""
     dxf = draw(tmp_path, water=[(0, 12), (24, 12)])
     out = tmp_path / "m.yaml"
-    line = refused(invoke("import", dxf, "-o", out), "loads.water_table")
+    line = assert_refused(invoke("import", dxf, "-o", out), "loads.water_table")
     assert line.startswith(f"error: {dxf}: loads.water_table: ")
     assert "<import>" not in line and not out.exists()
 
@@ -385,10 +385,10 @@ HOSTILE = {
 @pytest.mark.parametrize("case", sorted(HOSTILE))
 def test_a_hostile_drawing_gives_exit_2_and_one_line(tmp_path, case):
     path = _hostile(tmp_path, case)
-    line = refused(invoke("import", path), path.name, *HOSTILE[case])
+    line = assert_refused(invoke("import", path), path.name, *HOSTILE[case])
     # the same drawing named by a model file: the same problem, at `geometry`
     (tmp_path / "model.yaml").write_text(MODEL.replace("section.dxf", path.name))
-    line = refused(
+    line = assert_refused(
         invoke("check", tmp_path / "model.yaml"),
         "model.yaml:",
         "geometry",
@@ -408,7 +408,7 @@ def test_a_fixed_region_across_the_outline_is_refused_beside_or_along_it_is_not(
         tmp_path, "across.dxf", fixed=[*p["fixed"], [(20, 5), (30, 5), (30, -1), (20, -1)]]
     )
     handle = [e.dxf.handle for e in ezdxf.readfile(across).modelspace().query("*[layer=='FIXED']")]
-    refused(
+    assert_refused(
         invoke("import", across, "--out", tmp_path / "across.yaml"),
         "across.dxf",
         f"the fixed region (layer FIXED: LWPOLYLINE #{handle[-1]}) crosses the outline",
@@ -449,23 +449,23 @@ def test_a_repaired_number_is_one_line_in_a_child_process(tmp_path):
         text=True,
         timeout=120,
     )
-    refused(r, "structural errors", '"20,5"')
+    assert_refused(r, "structural errors", '"20,5"')
 
 
 def test_missing_file_unknown_layer_and_unknown_joint(tmp_path):
-    refused(invoke("import", tmp_path / "nope.dxf"), "nope.dxf: file not found")
-    refused(invoke("import", tmp_path), "is a folder", "give a DXF file")
+    assert_refused(invoke("import", tmp_path / "nope.dxf"), "nope.dxf: file not found")
+    assert_refused(invoke("import", tmp_path), "is a folder", "give a DXF file")
     dxf = draw(tmp_path)
-    refused(
+    assert_refused(
         invoke("import", dxf, "--layer", "fixed=GROUND"),
         "no layer 'GROUND'",
         "its layers:",
         "FIXED",
     )
-    refused(invoke("import", dxf, "--layer", "roof=R"), "layers.roof", "not a part")
-    refused(invoke("import", dxf, "-j", "JOINT_X=bedding"), "no layer 'JOINT_X'")
+    assert_refused(invoke("import", dxf, "--layer", "roof=R"), "layers.roof", "not a part")
+    assert_refused(invoke("import", dxf, "-j", "JOINT_X=bedding"), "no layer 'JOINT_X'")
     (tmp_path / "model.yaml").write_text(MODEL.replace("  cross:", "  crossing:"))
-    refused(
+    assert_refused(
         invoke("check", tmp_path / "model.yaml"),
         "model.yaml",
         "layer JOINT_cross",
@@ -476,28 +476,28 @@ def test_missing_file_unknown_layer_and_unknown_joint(tmp_path):
             "{dxf: section.dxf}", "{dxf: section.dxf, layers: {joints: {JOINT_cross: nope}}}"
         )
     )
-    refused(
+    assert_refused(
         invoke("check", tmp_path / "model.yaml"),
         "geometry.layers.joints.JOINT_cross",
         "joint 'nope' is not defined",
     )
     (tmp_path / "model.yaml").write_text(MODEL.replace("section.dxf", "missing.dxf"))
-    refused(
+    assert_refused(
         invoke("check", tmp_path / "model.yaml"), "geometry.dxf", "missing.dxf", "file not found"
     )
     (tmp_path / "model.yaml").write_text(MODEL.replace("loads: {water_unit_weight: 9.81}", ""))
-    refused(invoke("check", tmp_path / "model.yaml"), "water table", "water_unit_weight")
+    assert_refused(invoke("check", tmp_path / "model.yaml"), "water table", "water_unit_weight")
     (tmp_path / "model.yaml").write_text(MODEL + "blocks: [{vertices: [[0, 0], [1, 0], [1, 1]]}]\n")
-    refused(invoke("check", tmp_path / "model.yaml"), "not both blocks and geometry")
+    assert_refused(invoke("check", tmp_path / "model.yaml"), "not both blocks and geometry")
 
 
 def test_bolts_are_passive_bolts_or_anchors_pulling_from_the_face(tmp_path):
     head = (11.0, 7.5)  # on the face (10, 10) - (14, 0): x = 10 + (10 - y) * 0.4
     tail = (head[0] - 6.0, head[1] - 1.6)
     dxf = draw(tmp_path, bolts=[(tail, head)])  # drawn from the far end: the head is found
-    refused(invoke("import", dxf), "1 bolts but neither", "--bolt-force", "--bolt-capacity")
+    assert_refused(invoke("import", dxf), "1 bolts but neither", "--bolt-force", "--bolt-capacity")
     (tmp_path / "model.yaml").write_text(MODEL)
-    refused(invoke("check", tmp_path / "model.yaml"), "geometry.bolt", "geometry.bolt_force")
+    assert_refused(invoke("check", tmp_path / "model.yaml"), "geometry.bolt", "geometry.bolt_force")
     angle = math.degrees(math.atan2(tail[1] - head[1], tail[0] - head[0]))
     # active anchors
     anchors = MODEL.replace("section.dxf}", "section.dxf, bolt_force: 80}")
@@ -526,7 +526,7 @@ def test_bolts_are_passive_bolts_or_anchors_pulling_from_the_face(tmp_path):
     assert same.length == bolt.length
     both = passive.replace("section.dxf,", "section.dxf, bolt_force: 80,")
     (tmp_path / "model.yaml").write_text(both)
-    refused(invoke("check", tmp_path / "model.yaml"), "both `bolt` and `bolt_force`")
+    assert_refused(invoke("check", tmp_path / "model.yaml"), "both `bolt` and `bolt_force`")
 
 
 # ------------------------------------------------------------------ results out
@@ -654,8 +654,10 @@ def test_format_options(tmp_path, fos_results):
     assert not (out / "springs.vtu").exists()
     (tmp_path / "box.yaml").write_text((out.parent / "model.yaml").read_text())
     draw(tmp_path)
-    refused(invoke("run", tmp_path / "box.yaml", "--format", "vtk"), "--format", "needs --out")
-    refused(
+    assert_refused(
+        invoke("run", tmp_path / "box.yaml", "--format", "vtk"), "--format", "needs --out"
+    )
+    assert_refused(
         invoke("run", tmp_path / "box.yaml", "--out", tmp_path / "o", "--format", "png"),
         "'png' is not a result format",
     )
@@ -666,7 +668,7 @@ def test_format_options(tmp_path, fos_results):
     written = {p.name for p in (tmp_path / "o").iterdir()}
     assert written - set(RESULT_FILES) == {"section.geojson"}
     # existing exchange files are not replaced without --overwrite, with nothing written
-    refused(
+    assert_refused(
         invoke("run", tmp_path / "box.yaml", "--out", tmp_path / "o", "--format", "geojson"),
         "already holds",
     )
@@ -769,7 +771,7 @@ def test_overwriting_results_refuses_to_leave_another_formats_files(tmp_path, fo
     assert first.exit_code == 0, first.stderr
     vtu = (folder / "blocks.vtu").read_bytes()
     again = invoke("run", tmp_path / "box.yaml", "--out", folder, "--overwrite", "-q")
-    refused(again, "holds blocks.vtu, interfaces.vtu of an earlier run")
+    assert_refused(again, "holds blocks.vtu, interfaces.vtu of an earlier run")
     assert (folder / "blocks.vtu").read_bytes() == vtu  # nothing removed
     both = invoke(
         "run", tmp_path / "box.yaml", "--out", folder, "--overwrite", "--format", "vtk", "-q"

@@ -24,7 +24,7 @@ from scipy import stats
 from typer.testing import CliRunner
 
 import rockdem
-from _cli import assert_refused as refused
+from _cli import assert_refused
 from rockdem.cli import app
 from rockdem.config import load_model
 from rockdem.studies import sampling
@@ -403,7 +403,7 @@ def test_a_study_never_writes_over_its_own_model_file(tmp_path, overwrite):
         before = model.read_bytes()
         flag = ["--overwrite"] if overwrite else []
         r = invoke("study", model, "--out", folder, "--workers", 0, "--quiet", *flag)
-        refused(r, "would write over its input", "another folder")
+        assert_refused(r, "would write over its input", "another folder")
         assert model.read_bytes() == before
 
 
@@ -416,7 +416,7 @@ def test_a_fresh_folder_with_the_users_files_is_refused(tmp_path):
         (folder / "worst").mkdir(parents=True)
         (folder / mine).write_text("mine\n")
         r = invoke("study", model, "--out", folder, "--workers", 0, "--quiet")
-        refused(r, f"holds {mine}", "--overwrite")
+        assert_refused(r, f"holds {mine}", "--overwrite")
         assert (folder / mine).read_text() == "mine\n"
 
 
@@ -437,7 +437,7 @@ def test_a_worst_sample_edited_in_place_is_never_deleted(tmp_path, overwrite):
     sample.write_text(edited)
     flag = ["--overwrite"] if overwrite else []
     r = invoke("study", model, "--out", folder, "--workers", 0, "--quiet", *flag)
-    refused(r, f"worst/{sample.name} was changed", "move the file out of worst/")
+    assert_refused(r, f"worst/{sample.name} was changed", "move the file out of worst/")
     assert sample.read_text() == edited
 
 
@@ -542,7 +542,7 @@ BAD = [
 def test_bad_input_is_one_line_and_exit_2(tmp_path, spec, fragments):
     model = write_model(tmp_path, spec)
     r = invoke("study", model, "--out", tmp_path / "out", "--workers", "0")
-    refused(r, "plane.yaml", *fragments)
+    assert_refused(r, "plane.yaml", *fragments)
     assert not (tmp_path / "out").exists()  # refused before anything is written
 
 
@@ -563,15 +563,15 @@ def test_contradictory_correlations_are_refused(tmp_path):
         ],
     }
     r = invoke("study", write_model(tmp_path, spec), "--out", tmp_path / "o", "--workers", "0")
-    refused(r, "study.correlations", "not positive definite")
+    assert_refused(r, "study.correlations", "not positive definite")
 
 
 def test_no_study_section_and_workers_with_scheduler(tmp_path):
     model = write_model(tmp_path, None)
-    refused(invoke("study", model, "--out", tmp_path / "o"), "has no `study:` section")
+    assert_refused(invoke("study", model, "--out", tmp_path / "o"), "has no `study:` section")
     spec = tmp_path / "s.yaml"
     spec.write_text(yaml.safe_dump({"study": normal_phi(samples=2, compute="verdict")}))
-    refused(
+    assert_refused(
         invoke(
             "study",
             model,
@@ -593,7 +593,7 @@ def test_no_study_section_and_workers_with_scheduler(tmp_path):
 def test_without_dask_the_command_says_how_to_install_it(tmp_path, monkeypatch):
     model = write_model(tmp_path, normal_phi(samples=2, compute="verdict"))
     monkeypatch.setitem(sys.modules, "dask.distributed", None)  # import fails
-    refused(invoke("study", model, "--out", tmp_path / "o"), "pip install 'rockdem[study]'")
+    assert_refused(invoke("study", model, "--out", tmp_path / "o"), "pip install 'rockdem[study]'")
 
 
 def test_a_sample_out_of_range_is_a_row_with_its_error():
@@ -692,12 +692,12 @@ def test_when_no_sample_can_be_analysed_the_study_is_refused(tmp_path):
     out.mkdir()
     (out / "notes.txt").write_text("mine\n")
     r = invoke("study", model, "--out", out, "--workers", 0)
-    refused(
+    assert_refused(
         r, "no sample could be analysed", f"{PHI} was out of its valid range", "truncated-normal"
     )
     assert sorted(p.name for p in out.iterdir()) == ["notes.txt"]
     r = invoke("study", model, "--out", tmp_path / "new", "--workers", 0)
-    refused(r, "no sample could be analysed")
+    assert_refused(r, "no sample could be analysed")
     assert not (tmp_path / "new").exists()
     with pytest.raises(rockdem.InputError, match="no sample could be analysed"):
         rockdem.study(plane_document(), spec, workers=0)
@@ -723,10 +723,10 @@ def test_an_unreachable_scheduler_leaves_the_folder_as_it_was(tmp_path, monkeypa
     (out / "notes.txt").write_text("mine\n")
     address = f"tcp://127.0.0.1:{port}"
     r = invoke("study", model, "--out", out, "--scheduler", address)
-    refused(r, f"--scheduler {address}", "no dask scheduler answered", "tcp://host:8786")
+    assert_refused(r, f"--scheduler {address}", "no dask scheduler answered", "tcp://host:8786")
     assert sorted(p.name for p in out.iterdir()) == ["notes.txt"]
     r = invoke("study", model, "--out", tmp_path / "new", "--scheduler", address)
-    refused(r, f"--scheduler {address}")
+    assert_refused(r, f"--scheduler {address}")
     assert not (tmp_path / "new").exists()
     other = write_model(tmp_path, normal_phi(samples=3, compute="verdict"), "other.yaml")
     r = invoke("study", other, "--out", out, "--workers", 0, "--quiet")
@@ -761,6 +761,6 @@ def test_a_scheduler_address_where_something_else_answers_is_one_clear_line(tmp_
         r = invoke("study", model, "--out", tmp_path / "out", "--scheduler", address)
     finally:
         server.close()
-    line = refused(r, f"--scheduler {address}", "is not a dask scheduler", "tcp://host:8786")
+    line = assert_refused(r, f"--scheduler {address}", "is not a dask scheduler", "tcp://host:8786")
     assert "MemoryError" not in line and "EiB" not in line
     assert not (tmp_path / "out").exists()
