@@ -492,6 +492,21 @@ def test_generate_slope_refuses_before_cutting():
     assert time.monotonic() - start < 2
 
 
+def test_a_profile_spike_thinner_than_the_tolerance_is_refused_at_the_profile():
+    """Found by fuzzing: a spike 1e-6 wide and 990 high left blocks with two
+    corners once close corners merged; the analysis stopped on a shapely error
+    (exit 1) instead of naming the profile (exit 2)."""
+    j = rd.Joint(1e5, 35)
+    spike = Profile([(-10, 10), (0, 10), (1e-6, 1000), (2e-6, 10), (20, 0)])
+    sets = [JointSet("bedding", 30, 2.5, j), JointSet("cross", 120, 3.0, j, origin=(0.5, 0))]
+    with pytest.raises(rd.InputError, match=r"profile.*thinner than the geometric tolerance"):
+        generate_slope(spike, sets, depth=6, unit_weight=26)
+    # the same spike 1 m wide is a slope like any other
+    wide = Profile([(-10, 10), (0, 10), (1, 40), (2, 10), (20, 0)])
+    blocks = generate_slope(wide, sets, depth=6, unit_weight=26).blocks
+    assert np.diff(blocks.offsets).min() >= 3
+
+
 # --------------------------------------------- check refuses what the rest would
 STAB = (
     BOX
