@@ -540,3 +540,29 @@ def test_readme_model_file_runs(tmp_path):
     r = invoke("run", str(tmp_path / "stack.yaml"))
     assert r.exit_code == 0, r.output
     assert "verdict: STABLE" in r.stdout
+
+
+def test_a_warning_printed_during_a_run_is_in_its_json_and_result_files(tmp_path):
+    """Found by fuzzing: joints 1e-6 stiff give a verdict that "does not hold"
+    (displacements of 1e7 block sizes); the warning went to stderr while the
+    JSON and result.json read "stable" with no warnings."""
+    path = tmp_path / "soft.yaml"
+    path.write_text(BOX.replace("normal_stiffness: 1.0e+6", "normal_stiffness: 1.0e-6"))
+    r = invoke("run", path, "--json", "--quiet")
+    assert r.exit_code == 0, r.output
+    warnings = json.loads(r.stdout)["warnings"]
+    assert any("the verdict does not hold" in w for w in warnings), warnings
+    r = invoke("run", path, "--out", tmp_path / "out", "--quiet")
+    assert r.exit_code == 0, r.output
+    saved = json.loads((tmp_path / "out" / "result.json").read_text())["warnings"]
+    assert saved == warnings
+    assert r.output.count("the verdict does not hold") == 1  # printed once, on stderr
+    # a model without a warning has none (nothing carried over from the last command)
+    r = invoke("run", _box(tmp_path), "--json", "--quiet")
+    assert json.loads(r.stdout)["warnings"] == []
+
+
+def _box(tmp_path) -> Path:
+    path = tmp_path / "box.yaml"
+    path.write_text(BOX)
+    return path

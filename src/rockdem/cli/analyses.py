@@ -30,6 +30,7 @@ from .common import (
     _progress,
     err,
     out,
+    with_issued_warnings,
 )
 
 FormatOpt = Annotated[
@@ -115,7 +116,7 @@ def run(
             _write(
                 out_dir,
                 result,
-                {**doc, **echo},
+                with_issued_warnings({**doc, **echo}),
                 overwrite,
                 quiet or json_,
                 units=units,
@@ -123,7 +124,7 @@ def run(
                 units_note=cfg.units,
             )
         if json_:
-            _echo_json(doc)
+            _echo_json(with_issued_warnings(doc))
             return
         _print_run(doc, result)
 
@@ -357,7 +358,7 @@ def fos(
             _write(
                 out_dir,
                 state,
-                {**doc, **extra},
+                with_issued_warnings({**doc, **extra}),
                 overwrite,
                 quiet or json_,
                 modes,
@@ -366,7 +367,7 @@ def fos(
                 units_note=cfg.units,
             )
         if json_:
-            _echo_json(doc)
+            _echo_json(with_issued_warnings(doc))
             return
         _print_fos(doc)
 
