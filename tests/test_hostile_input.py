@@ -507,6 +507,21 @@ def test_a_profile_spike_thinner_than_the_tolerance_is_refused_at_the_profile():
     assert np.diff(blocks.offsets).min() >= 3
 
 
+def test_a_model_too_small_for_its_coordinates_is_refused():
+    """Found by fuzzing: the seed paper's wedge shrunk to 10 um and moved to
+    x = 1e9 (174 steps of floating point across it) read FS 1.0388, not
+    0.9786; the same wedge at its own size there (4e7 steps) is analysed."""
+    wedge = [(0, 0), (2, 0), (2, 1), (0, 1)]
+    ground = [(-1, -1), (3, -1), (3, 0), (-1, 0)]
+
+    def moved(scale):
+        return [[(1e9 + scale * x, scale * y) for x, y in p] for p in (ground, wedge)]
+
+    with pytest.raises(rd.InputError, match=r"blocks.*floating point resolves only"):
+        rd.Blocks.from_polygons(moved(1e-5), fixed=[True, False])
+    assert rd.Blocks.from_polygons(moved(10.0), fixed=[True, False]).n_blocks == 2
+
+
 # --------------------------------------------- check refuses what the rest would
 STAB = (
     BOX

@@ -125,6 +125,7 @@ class Blocks:
         label = {i: int(ids_arr[i]) for i in range(n)}
         _check_spread(rings, label)
         extent = _extent(np.concatenate(rings))
+        _check_resolution(np.concatenate(rings), extent)
         tol = GEOMETRY_RTOL * extent
         clean = []
         for i, xy in enumerate(rings):
@@ -256,6 +257,28 @@ def _as_vertices(poly, i: int) -> np.ndarray:
     # a closing vertex equal to the first is dropped by _clean_ring, with a
     # tolerance relative to the model's size (never to the coordinates' size)
     return xy.astype(float)
+
+
+#: fewest steps of floating-point resolution across a model: a model this
+#: few steps wide at its coordinates cannot be cut, matched and analysed
+#: (found by fuzzing: the two-block wedge shrunk to 10 um at x = 1e9, 45
+#: steps, read FS 1.0388 instead of 0.9786; 10 m there, 4.5e7 steps, is right)
+MIN_RESOLUTION_STEPS = 1e6
+
+
+def _check_resolution(xy: np.ndarray, extent: float) -> None:
+    """Refuse a model so small for the size of its coordinates that floating
+    point cannot resolve it."""
+    far = float(np.max(np.abs(xy))) if xy.size else 0.0
+    steps = extent / (np.finfo(float).eps * far) if far > 0 else np.inf
+    if steps < MIN_RESOLUTION_STEPS:
+        raise InputError(
+            "blocks",
+            f"span {extent:.3g} at coordinates up to {far:.3g}: floating point resolves only "
+            f"{steps:.3g} steps across the model (at least {MIN_RESOLUTION_STEPS:.0e} are needed)",
+            "move the model near the origin (subtract a reference point from every "
+            "coordinate), or check the units",
+        )
 
 
 def _check_spread(rings: list[np.ndarray], label) -> None:
