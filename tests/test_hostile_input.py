@@ -522,6 +522,21 @@ def test_a_model_too_small_for_its_coordinates_is_refused():
     assert rd.Blocks.from_polygons(moved(10.0), fixed=[True, False]).n_blocks == 2
 
 
+def test_a_random_joint_set_far_from_its_origin_is_refused_at_the_origin():
+    """Found by fuzzing: a 10 m slope at x = 3e8 drew its lognormal spacings
+    one by one from the set's origin at (0, 0), 1.2e8 of them: 8.5 GB."""
+    j = rd.Joint(1e6, 30)
+    rough = JointSet("a", 30, 2.5, j, spacing_sd=0.5)
+    start = time.monotonic()
+    with pytest.raises(rd.InputError, match=r"joint set 'a' origin.*spacings from the section"):
+        generate_slope(Profile.simple(10, 60, toe=(3e8, 0)), [rough], depth=5, unit_weight=25)
+    assert time.monotonic() - start < 2
+    # the same set with its origin at the slope is cut as usual
+    near = JointSet("a", 30, 2.5, j, spacing_sd=0.5, origin=(3e8, 0))
+    slope = generate_slope(Profile.simple(10, 60, toe=(3e8, 0)), [near], depth=5, unit_weight=25)
+    assert slope.blocks.n_blocks > 3
+
+
 # --------------------------------------------- check refuses what the rest would
 STAB = (
     BOX

@@ -43,6 +43,11 @@ __all__ = ["JointSet"]
 RESERVED_NAMES = ("bridge", "ground")
 #: largest coefficient of variation of a joint set's spacing (spacing_sd / spacing)
 MAX_SPACING_COV = 2.0
+#: a set with random spacing draws its joints one by one from its origin:
+#: at most this many spacings away from it (a model at real-world
+#: coordinates, 4e6 m from an origin at (0, 0) with 2.5 m spacing, takes
+#: 1.6e6; 1e7 takes about 1 s and 64 MB)
+MAX_WALK = 1e7
 
 
 @dataclass(frozen=True, eq=False)
@@ -278,6 +283,16 @@ class JointSet:
             j0, j1 = math.ceil(s_lo / sp), math.floor(s_hi / sp)
             idx = np.arange(j0, j1 + 1)
             return idx * sp, idx
+        walk = max(abs(s_lo), abs(s_hi)) / sp  # about this many joints from the origin
+        if walk > MAX_WALK:
+            # found by fuzzing: a 20-block slope at x = 3e8 walked 1.2e8 joints
+            # from the origin, one at a time, and took 8.5 GB
+            raise InputError(
+                f"joint set '{self.name}' origin",
+                f"lies about {walk:.3g} spacings from the section: random spacings are "
+                "drawn joint by joint from the origin",
+                f"give the set an origin near the section (within {MAX_WALK:.0e} spacings)",
+            )
         sigma2 = math.log1p((self.spacing_sd / sp) ** 2)
         mu = math.log(sp) - sigma2 / 2
         out = []
@@ -290,7 +305,8 @@ class JointSet:
                     j += 1
                     if (sign > 0 and pos > limit) or (sign < 0 and pos < limit):
                         break
-                    vals.append((pos, int(sign) * j))
+                    if s_lo <= pos <= s_hi:  # (only the section's joints are kept)
+                        vals.append((pos, int(sign) * j))
                 else:
                     continue
                 break
