@@ -24,6 +24,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import shapely
 
 import rockdem as rd
 from _cli import assert_refused
@@ -535,6 +536,27 @@ def test_a_random_joint_set_far_from_its_origin_is_refused_at_the_origin():
     near = JointSet("a", 30, 2.5, j, spacing_sd=0.5, origin=(3e8, 0))
     slope = generate_slope(Profile.simple(10, 60, toe=(3e8, 0)), [near], depth=5, unit_weight=25)
     assert slope.blocks.n_blocks > 3
+
+
+def test_traces_are_cut_only_where_their_line_crosses_a_long_flat_section():
+    """Found by fuzzing: a section 5 km long and 47 m high cut its traces over
+    the whole circle around it (57 million pieces, out of memory); inside the
+    section the pieces are the same as before."""
+    j = rd.Joint(1e6, 30)
+    broken = JointSet("a", 30, 0.5, j, trace_length=1.4, gap=1.5)
+    seg, trace, _ = broken.segments((0, 0, 2000, 20))
+    # the box with its margin is 2,040 x 60: at most 60 / sin 30 / 2.9 x 2 = 83
+    # pieces on each of the (2,040 sin 30 + 60 cos 30) / 0.5 = 2,144 lines
+    # crossing it (over the circle around it: 5,744,640 pieces)
+    assert len(seg) < 2_144 * 83
+    lo, hi = seg.min(axis=(0, 1)), seg.max(axis=(0, 1))
+    assert lo[0] > -100 and hi[0] < 2100 and lo[1] > -100 and hi[1] < 120
+    # a box inside the long one sees the same traces (the pattern is fixed by the set)
+    box = shapely.box(900, 5, 950, 15)
+    big = shapely.intersection(shapely.linestrings(seg[trace]), box)
+    small_seg, small_trace, _ = broken.segments((900, 5, 950, 15))
+    small = shapely.intersection(shapely.linestrings(small_seg[small_trace]), box)
+    assert np.isclose(shapely.length(big).sum(), shapely.length(small).sum(), rtol=1e-9)
 
 
 # --------------------------------------------- check refuses what the rest would
