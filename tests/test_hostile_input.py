@@ -994,7 +994,11 @@ def test_a_correlation_of_three_inputs_is_not_asked_for_as_a_point(tmp_path):
         ),
         (
             "loads: {water_table: [[-100, 5], [100, 5]]}",
-            ("loads.water_unit_weight: is missing: a water table needs it",),
+            ("loads.water_unit_weight: is 0 or missing: a water table needs it",),
+        ),
+        (  # found by fuzzing: a 0 written in the file was called "missing"
+            "loads: {water_unit_weight: 0, water_table: [[-100, 5], [100, 5]]}",
+            ("loads.water_unit_weight: is 0 or missing: a water table needs it",),
         ),
     ],
 )

@@ -138,7 +138,7 @@ class Loads:
             if not (np.isfinite(gw) and gw > 0):
                 raise InputError(
                     "loads water_unit_weight",
-                    "is missing: a water table needs it"
+                    "is 0 or missing: a water table needs it"
                     if gw == 0
                     else f"{gw} is not a positive unit weight",
                     "give the unit weight of water in the model's units (9.81 kN/m^3, 1 t/m^3)",
