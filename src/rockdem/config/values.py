@@ -175,7 +175,11 @@ def _attribute_docs(cls: type) -> dict[str, str]:
     import inspect
     import textwrap
 
-    tree = ast.parse(textwrap.dedent(inspect.getsource(cls)))
+    try:
+        source = inspect.getsource(cls)
+    except (OSError, TypeError):  # no source shipped (a frozen application)
+        return {}
+    tree = ast.parse(textwrap.dedent(source))
     docs, target = {}, None
     for node in tree.body[0].body:
         if isinstance(node, ast.AnnAssign) and isinstance(node.target, ast.Name):
