@@ -366,6 +366,17 @@ def test_values_out_of_their_range_name_the_key_and_the_range(tmp_path, old, new
     assert_refused(check(tmp_path, BOX.replace(old, new, 1)), key, "out of range", fragment)
 
 
+@pytest.mark.parametrize("key", ["shear_stiffness", "shear_capacity", "pretension"])
+def test_a_bolts_dowel_and_pretension_have_the_range_of_stiffnesses_and_forces(tmp_path, key):
+    """Found by fuzzing: a bolt's shear_stiffness of 1e300 (no upper bound)
+    reached the solver as "the elastic stiffness is singular"."""
+    bolted = BOX + (
+        "bolts:\n  - {head: [1, 1], angle: 270, length: 1.5, capacity: 50, "
+        f"axial_stiffness: 1.0e+4, {key}: 1.0e+300}}\n"
+    )
+    assert_refused(check(tmp_path, bolted), f"bolts[0].{key}", "out of range", "<= 1e+15")
+
+
 @pytest.mark.parametrize(
     "units, fragment",
     [

@@ -7,7 +7,15 @@ from pathlib import Path
 from typing import Any, Literal
 
 from .errors import ModelFileError, _keypath, _line
-from .values import Magnitude, NonNegative, Positive, Stiffness, UnitWeight, _Section
+from .values import (
+    Magnitude,
+    OptionalMagnitude,
+    OptionalStiffness,
+    Positive,
+    Stiffness,
+    UnitWeight,
+    _Section,
+)
 
 
 class DxfLayersSpec(_Section):
@@ -36,13 +44,13 @@ class DxfBoltSpec(_Section):
     """Axial yield force of the steel, one bolt."""
     axial_stiffness: Stiffness
     """Axial force per unit opening of a crossed joint along the bolt, one bolt."""
-    shear_stiffness: NonNegative = 0.0
+    shear_stiffness: OptionalStiffness = 0.0
     """Dowel stiffness across a joint, one bolt (0: none)."""
-    shear_capacity: NonNegative = 0.0
+    shear_capacity: OptionalMagnitude = 0.0
     """Dowel (shear) capacity, one bolt."""
     bond_strength: Positive | None = None
     """Grout bond force per unit length (null: the steel yields first)."""
-    pretension: NonNegative = 0.0
+    pretension: OptionalMagnitude = 0.0
     """Axial force locked in at installation."""
     spacing: Positive = 1.0
     """Out-of-plane spacing of the bolt row."""

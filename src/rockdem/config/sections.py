@@ -21,7 +21,8 @@ from .values import (
     Integer,
     Length,
     Magnitude,
-    NonNegative,
+    OptionalMagnitude,
+    OptionalStiffness,
     Point,
     Polygon,
     Positive,
@@ -318,14 +319,14 @@ class BoltSpec(_Section):
     axial_stiffness: Stiffness
     """Axial force per unit opening of a crossed joint along the bolt, one bolt (about
     E A / L for a debonded length L each side of the joint)."""
-    shear_stiffness: NonNegative = 0.0
+    shear_stiffness: OptionalStiffness = 0.0
     """Dowel stiffness across a joint, one bolt (0: none)."""
-    shear_capacity: NonNegative = 0.0
+    shear_capacity: OptionalMagnitude = 0.0
     """Dowel (shear) capacity, one bolt."""
     bond_strength: Positive | None = None
     """Grout bond force per unit length: the axial capacity at a joint is at most the
     bond over the length beyond it (null: the steel yields first)."""
-    pretension: NonNegative = 0.0
+    pretension: OptionalMagnitude = 0.0
     """Axial force locked in at installation."""
     spacing: Positive = 1.0
     """Out-of-plane spacing of the bolt row (the section carries force / spacing)."""

@@ -144,6 +144,8 @@ Extent = bounded(0.0, LENGTH_MAX)
 UnitWeight = bounded(0.0, UNIT_WEIGHT_MAX)
 Stress = bounded(0.0, STRESS_MAX)
 Stiffness = bounded(STIFFNESS_MIN, STIFFNESS_MAX)
+#: A stiffness that may be 0 (none): a bolt's dowel stiffness.
+OptionalStiffness = bounded(0.0, STIFFNESS_MAX)
 StiffnessRatio = bounded(0.01, 100.0)
 FaceAngle = bounded(0.0, 90.0, open_lo=True)
 Share = bounded(0.0, 1.0)
@@ -151,6 +153,8 @@ DipDeviation = bounded(0.0, 90.0)
 Seismic = bounded(-1.0, 1.0, open_lo=True, open_hi=True)
 #: A force magnitude (> 0).
 Magnitude = bounded(0.0, FORCE_MAX, open_lo=True)
+#: A force magnitude that may be 0 (none).
+OptionalMagnitude = bounded(0.0, FORCE_MAX)
 #: A direction in degrees counter-clockwise from +x.
 Direction = bounded(-360.0, 360.0)
 
