@@ -350,3 +350,26 @@ def test_a_bolt_key_the_engine_refuses_is_named_by_its_path():
         parse_model(text, source="b.yaml")
     assert info.value.key == "bolts[0].spacing"
     assert "is far below the size of the blocks" in str(info.value)
+
+
+def test_a_bolt_far_stiffer_than_the_joint_it_crosses_is_refused(tmp_path):
+    """Found by fuzzing: a bolt of axial stiffness 1e13 across 1e6-stiff
+    joints (5e6 x) on a flat two-block stack, which cannot fail, read
+    "strength-independent failure"; on the block on a plane 2.5e5 x read
+    1.771 and 2.5e6 x 1.50 against the closed form 1.7833.  Up to the limit,
+    1e4 x, the closed form holds."""
+    from rockdem.bolts import BOLT_STIFFNESS_CONTRAST_MAX
+    from rockdem.config import ModelFileError, parse_model
+
+    stiff = 2.5e3 * 1e6 * WIDTH  # 2,500 x the 4 m base's kn x length
+    fos = rd.factor_of_safety(block_with_bolt(30.0, axial_stiffness=stiff, shear_stiffness=stiff))
+    assert fos.value == pytest.approx(bolted_fos(30.0, 30.0), rel=0.005)
+    for key in ("axial_stiffness", "shear_stiffness"):
+        too_stiff = 2 * BOLT_STIFFNESS_CONTRAST_MAX * 1e6 * WIDTH
+        with pytest.raises(InputError, match=f"bolts {key}: .* times as stiff as the joint"):
+            rd.factor_of_safety(block_with_bolt(30.0, **{key: too_stiff}))
+    text = BOLTED_BOX.replace("1.0e+4}", "1.0e+13}")
+    with pytest.raises(ModelFileError) as info:
+        parse_model(text, source="b.yaml")
+    assert info.value.key == "bolts[0].axial_stiffness"
+    assert "give axial_stiffness: 1e+10 or less" in str(info.value)

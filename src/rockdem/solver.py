@@ -34,7 +34,7 @@ import scipy.sparse as sp
 
 from .assembly import Assembly, build_assembly
 from .blocks import Blocks
-from .bolts import Crossings, place_bolts
+from .bolts import Crossings, check_bolt_stiffness, place_bolts
 from .errors import InputError
 from .interfaces import Interfaces, assign_joints, check_held, find_interfaces
 from .joints import check_stiffness_contrast
@@ -127,6 +127,7 @@ def build_system(model: Model, f_block: np.ndarray | None = None) -> System:
     n = springs.n_springs
     K0 = asm.stiffness(springs.kn, np.zeros(n), springs.ks)
     bolts = place_bolts(model.bolts, blocks, faces, asm)
+    check_bolt_stiffness(model.bolts, bolts, faces, model.joints)
     if bolts is not None:
         K0.data += bolts.stiffness_data(np.column_stack([bolts.k_axial, bolts.k_shear]))
     if f_block is None:
