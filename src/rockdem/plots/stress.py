@@ -107,18 +107,17 @@ def joint_path(a, chosen: np.ndarray) -> JointPath:
     if d[0] < -1e-9 or (abs(d[0]) <= 1e-9 and d[1] > 0):
         d = -d
     order = chosen[np.argsort(mid @ d, kind="stable")]
-    idx, pos, piece = [], [], []
-    offset = 0.0
-    for k, i in enumerate(order):
-        start = faces.start[i] if (faces.end[i] - faces.start[i]) @ d >= 0 else faces.end[i]
-        s = np.flatnonzero(sp.interface == i)
-        along = np.hypot(*(sp.point[s] - start).T)
-        o = np.argsort(along, kind="stable")
-        idx.append(s[o])
-        pos.append(offset + along[o])
-        piece.append(np.full(len(s), k))
-        offset += float(faces.length[i])
-    return JointPath(order, np.concatenate(idx), np.concatenate(pos), np.concatenate(piece))
+    # each interface's springs, by distance from its end that comes first along d
+    rank = np.full(faces.n_interfaces, -1)
+    rank[order] = np.arange(len(order))
+    s = np.flatnonzero(rank[sp.interface] >= 0)
+    piece = rank[sp.interface[s]]
+    forward = np.einsum("ij,j->i", faces.end[order] - faces.start[order], d) >= 0
+    start = np.where(forward[:, None], faces.start[order], faces.end[order])
+    along = np.hypot(*(sp.point[s] - start[piece]).T)
+    o = np.lexsort((along, piece))
+    offset = np.concatenate([[0.0], np.cumsum(faces.length[order])[:-1]])
+    return JointPath(order, s[o], offset[piece[o]] + along[o], piece[o])
 
 
 def _broken(x: np.ndarray, y: np.ndarray, piece: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
