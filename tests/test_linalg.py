@@ -133,3 +133,22 @@ def test_a_solve_ending_within_the_relaxation_tolerance_is_labelled_an_equilibri
         out = solver.newton(system, state, 1.0, 1.0, q, 0)  # no iteration: judge q as it is
         assert out.converged is converged, (target, out.residuals)
         assert (out.reason == solver.KINKED) is converged
+
+
+@pytest.mark.parametrize("value", ["bogus", "pardsio", "umfpack"])
+def test_a_solver_choice_that_would_be_ignored_is_refused(monkeypatch, value):
+    """Found by fuzzing: ROCKDEM_SOLVER=bogus was ignored silently (PARDISO ran).
+    The API refuses it where the solver is chosen; the command line before any
+    work, naming the variable rather than the model file."""
+    from typer.testing import CliRunner
+
+    from _cli import assert_refused
+    from rockdem.cli import app
+
+    monkeypatch.setenv("ROCKDEM_SOLVER", value)
+    with pytest.raises(rd.InputError, match=r"ROCKDEM_SOLVER: .* is not a solver"):
+        linalg.backend(10_000)
+    r = CliRunner().invoke(app, ["fos", "--example", "wedge-verification"])
+    assert_refused(r, "error: ROCKDEM_SOLVER:", "auto, pardiso, superlu")
+    monkeypatch.setenv("ROCKDEM_SOLVER", " SuperLU ")
+    assert linalg.backend(10_000) == "superlu"

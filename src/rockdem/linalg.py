@@ -22,8 +22,9 @@ depends only on the pattern is done once per model:
   pivoting: their fill does not matter, and the paths of the toppling
   verification cases were validated with it.
 
-``ROCKDEM_SOLVER=superlu`` forces SuperLU.  :func:`backend` tells which one
-runs (``rockdem check`` prints it).
+``ROCKDEM_SOLVER=superlu`` forces SuperLU (``pardiso`` insists on PARDISO,
+``auto`` or unset: PARDISO where installed; anything else is refused).
+:func:`backend` tells which one runs (``rockdem check`` prints it).
 
 **Reproducible runs.**  Threaded PARDISO sums in an order that changes from
 run to run (measured: two different elastic solutions, in the last bits,
@@ -41,6 +42,8 @@ import os
 import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
+
+from .errors import InputError
 
 _PYPARDISO: object = False  # not looked for yet; None when not installed
 
@@ -67,10 +70,33 @@ PARDISO_FROM = 600
 _MKL_RT: str | None = None  # the MKL library found by the first PARDISO handle
 
 
+#: what ``ROCKDEM_SOLVER`` may say ("" or "auto": PARDISO where installed)
+SOLVER_CHOICES = ("auto", "pardiso", "superlu")
+
+
+def _requested_solver() -> str:
+    """``ROCKDEM_SOLVER``, checked: an InputError for a value that would
+    otherwise be ignored, or "pardiso" where it is not installed."""
+    asked = os.environ.get("ROCKDEM_SOLVER", "").strip().lower() or "auto"
+    if asked not in SOLVER_CHOICES:
+        raise InputError(
+            "ROCKDEM_SOLVER",
+            f"{asked!r} is not a solver",
+            f"set it to one of {', '.join(SOLVER_CHOICES)}, or unset it",
+        )
+    if asked == "pardiso" and _pardiso_module() is None:
+        raise InputError(
+            "ROCKDEM_SOLVER",
+            "asks for PARDISO, which is not installed here",
+            "install it (pip install 'rockdem[fast]') or unset ROCKDEM_SOLVER for SuperLU",
+        )
+    return asked
+
+
 def backend(n: int = PARDISO_FROM + 1) -> str:
     """The factorisation used for ``n`` unknowns: ``"pardiso"`` or ``"superlu"``."""
-    forced = os.environ.get("ROCKDEM_SOLVER", "").lower() == "superlu"
-    if n > PARDISO_FROM and not forced and _pardiso_module() is not None:
+    asked = _requested_solver()
+    if n > PARDISO_FROM and asked != "superlu" and _pardiso_module() is not None:
         return "pardiso"
     return "superlu"
 

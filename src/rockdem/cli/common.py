@@ -142,6 +142,20 @@ def _root(
     """Stability of jointed rock slopes by the discrete element method."""
     _ROOT["max_blocks"] = max_blocks
     _show_warnings()
+    _check_solver_choice()
+
+
+def _check_solver_choice() -> None:
+    """``ROCKDEM_SOLVER`` checked before any work, its error naming the
+    variable (raised mid-analysis, the error read as the model file's)."""
+    import os
+
+    if not os.environ.get("ROCKDEM_SOLVER", "").strip():
+        return
+    from ..linalg import _requested_solver
+
+    with _guard(debug=False):
+        _requested_solver()
 
 
 #: the ModelWarnings this command has printed (one line each), for its JSON
