@@ -132,6 +132,28 @@ def test_model_file_path(tmp_path):
     assert "t, m, t/m^2" in text and "UNSTABLE" in text
 
 
+def test_a_warning_issued_about_the_model_is_in_the_report(tmp_path):
+    """Found by fuzzing: the warnings that say a verdict does not hold (joints
+    1e-6 stiff: displacements of 1e7 block sizes) reached the terminal and the
+    JSON but not report.html, which read STABLE with no warning."""
+    from typer.testing import CliRunner
+
+    from _models import BOX
+    from rockdem.cli import app
+
+    soft = tmp_path / "soft.yaml"
+    soft.write_text(BOX.replace("normal_stiffness: 1.0e+6", "normal_stiffness: 1.0e-6"))
+    with pytest.warns(rd.ModelWarning, match="the verdict does not hold"):
+        path = write_report(soft, tmp_path / "api", compute_fos=False, animation=False)
+    boxes = re.findall(r'<div class="warning">Warning: ([^<]*)</div>', path.read_text())
+    assert len(boxes) == 1 and "the verdict does not hold" in boxes[0], boxes
+    r = CliRunner().invoke(app, ["report", str(soft), "-o", str(tmp_path / "cli"), "-q"])
+    assert r.exit_code == 0, r.output
+    text = (tmp_path / "cli" / "report.html").read_text()
+    boxes = re.findall(r'<div class="warning">Warning: ([^<]*)</div>', text)
+    assert len(boxes) == 1 and "the verdict does not hold" in boxes[0], boxes
+
+
 def test_bad_inputs(tmp_path, model):
     with pytest.raises(TypeError):
         write_report(object(), tmp_path)

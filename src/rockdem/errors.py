@@ -7,6 +7,9 @@ Bad input is an *error* (raised); a slope that finds no equilibrium is a
 from __future__ import annotations
 
 import math
+import warnings
+from collections.abc import Iterator
+from contextlib import contextmanager
 
 
 class RockdemError(Exception):
@@ -18,6 +21,23 @@ class ModelWarning(UserWarning):
     no contact, a loose equilibrium tolerance): issued with :mod:`warnings`,
     so that Python callers see its category and can filter it; the command
     line prints it as ``warning: ...``."""
+
+
+@contextmanager
+def collecting_model_warnings() -> Iterator[list[str]]:
+    """The texts of the ModelWarnings shown inside the block, in a list (for
+    a report that must carry them); they are still shown as before."""
+    seen: list[str] = []
+    with warnings.catch_warnings():  # restores showwarning on exit
+        shown = warnings.showwarning
+
+        def show(message, category, *args, **kwargs):
+            if issubclass(category, ModelWarning):
+                seen.append(" ".join(str(message).split()))
+            shown(message, category, *args, **kwargs)
+
+        warnings.showwarning = show
+        yield seen
 
 
 class InputError(RockdemError, ValueError):

@@ -21,6 +21,7 @@ import numpy as np
 
 from . import plots
 from .analysis import analyse
+from .errors import collecting_model_warnings
 from .model import Model
 from .report_html import CSS, esc, figure_uri, html_table, img, num
 from .report_tables import bolts_table, failed_table, state_counts, unstable_table, warnings_html
@@ -196,6 +197,16 @@ def _same_state(a: Analysis, b: Analysis) -> bool:
 
 
 # ------------------------------------------------------------------ the report
+def _analyses(model, analysis, fos, compute_fos: bool, fos_options):
+    """The staged analysis and the factor of safety of a report (run where not given)."""
+    if not isinstance(model, Model):
+        raise TypeError(f"write_report needs a Model or a model file, not {type(model)!r}")
+    analysis = analysis if analysis is not None else analyse(model)
+    if fos is None and compute_fos:
+        fos = factor_of_safety(analysis.system, **(fos_options or {}))
+    return analysis, fos
+
+
 def write_report(
     model,
     out_dir,
@@ -216,6 +227,7 @@ def write_report(
     block_ids: bool | None = None,
     max_rows: int = 200,
     study=None,
+    notes: Sequence[str] = (),
 ) -> Path:
     """Write one self-contained HTML report of a model's analysis.
 
@@ -256,6 +268,10 @@ def write_report(
     study : StudyResult or path, optional
         A probabilistic or parametric study (:func:`rockdem.study`, or its
         ``--out`` folder): adds a section with its summary and pictures.
+    notes : sequence of str
+        Warnings already issued about this model (while loading it, or in the
+        analyses given), shown under the verdict; the ModelWarnings issued
+        while the report loads and analyses the model are added.
 
     Returns
     -------
@@ -264,21 +280,20 @@ def write_report(
     """
     from . import __version__
 
-    if isinstance(model, (str, Path)):
-        from .config import load_model
-
-        model, cfg = load_model(model)
-        units = units or getattr(cfg, "units", None) or None
-    if not isinstance(model, Model):
-        raise TypeError(f"write_report needs a Model or a model file, not {type(model)!r}")
     if image_format not in ("png", "svg"):
         raise ValueError("image_format must be 'png' or 'svg'")
+    with collecting_model_warnings() as issued:
+        if isinstance(model, (str, Path)):
+            from .config import load_model
+
+            model, cfg = load_model(model)
+            units = units or getattr(cfg, "units", None) or None
+        analysis, fos = _analyses(model, analysis, fos, compute_fos, fos_options)
+    notes = [*notes, *issued]
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     u = parse_units(units)
-    a = analysis if analysis is not None else analyse(model)
-    if fos is None and compute_fos:
-        fos = factor_of_safety(a.system, **(fos_options or {}))
+    a = analysis
     system = a.system
     failed = fos.failed_analysis if fos is not None else None
     progressive = failed if failed is not None else a
@@ -412,7 +427,7 @@ def write_report(
         '<a href="#inputs">Inputs</a></nav>',
         '<h2 id="results">Verdict</h2>',
         _verdict(a, fos),
-        warnings_html(a, failed),
+        warnings_html(a, failed, notes=notes),
         '<h3 id="trust">How far to trust this</h3>',
         "<ul>" + "".join(f"<li>{esc(t)}</li>" for t in trust_statements(a, fos)) + "</ul>",
         '<h2 id="tables">Failed joints and unstable blocks</h2>',

@@ -3,6 +3,8 @@ the failed interfaces, the unstable blocks, the bolts, the warnings."""
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import numpy as np
 
 from . import plots
@@ -157,13 +159,17 @@ def bolts_table(a: Analysis, u: Units = UNKNOWN) -> str:
     return note + html_table(header, rows, left=3, cls="bolts")
 
 
-def warnings_html(*analyses: Analysis | None) -> str:
-    """A warning box per side of the model the mechanism reaches (rockdem.modes)."""
+def warnings_html(*analyses: Analysis | None, notes: Sequence[str] = ()) -> str:
+    """A warning box per side of the model the mechanism reaches (rockdem.modes),
+    then one per note (the ModelWarnings issued about the model: a joint line
+    that assigns nothing, joints too soft for the verdict to hold)."""
     shown: dict[str, str] = {}  # message -> the factor of the first state that gave it
     for a in analyses:
         for text in boundary_warnings(a) if a is not None else ():
             shown.setdefault(text, format_factor(a.strength_factor))
-    return "".join(
+    boxes = [
         f'<div class="warning">Warning (mechanism at F = {F}): {esc(t)}.</div>'
         for t, F in shown.items()
-    )
+    ]
+    boxes += [f'<div class="warning">Warning: {esc(t)}</div>' for t in dict.fromkeys(notes)]
+    return "".join(boxes)

@@ -10,6 +10,7 @@ from typing import Annotated, Any
 import typer
 
 from .common import (
+    ISSUED,
     DebugOpt,
     ExampleOpt,
     JointOpt,
@@ -199,6 +200,7 @@ def report(
                 joints=joints,
                 image_format="svg" if svg else "png",
                 animation=not no_animation,
+                notes=list(ISSUED),
                 **_plot_units(cfg.units),
             )
         typer.echo(str(target))
