@@ -268,6 +268,18 @@ def test_toml_underscores_are_toml_numbers_but_quoted_ones_are_not(tmp_path):
     assert_refused(r, "joints.bedding.friction_angle", "expected a number")
 
 
+def test_a_toml_file_gets_its_fix_in_toml(tmp_path):
+    """Found by fuzzing: joints written as TOML's [[joints]] were told to
+    "write `key: value` lines indented under it", YAML's syntax."""
+    listed = BOX_TOML.replace("[joints.bedding]", '[[joints]]\nname = "bedding"')
+    line = assert_refused(check(tmp_path, listed, "a.toml"), "joints: expected a mapping")
+    assert "[joints.NAME]" in line and "`key = value`" in line and "indented" not in line
+    missing = BOX_TOML.replace("friction_angle = 30\n", "")
+    assert_refused(check(tmp_path, missing, "b.toml"), "add `friction_angle = ...`")
+    yaml = BOX.replace(", friction_angle: 30}", "}")
+    assert_refused(check(tmp_path, yaml, "c.yaml"), "add `friction_angle:`")
+
+
 @pytest.mark.parametrize("name", ["m.yaml", "m.toml"])
 def test_a_number_of_thousands_of_digits_is_refused_at_its_line(tmp_path, name):
     """Found by fuzzing: a 5,000-digit integer stopped the program with

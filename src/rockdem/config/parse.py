@@ -264,7 +264,7 @@ def parse_model(
 ) -> tuple[Any, ModelFile]:
     """Model and validated file from the text of a model file."""
     data, nodes = parse_document(text, fmt=fmt, source=source)
-    cfg = validate_document(data, source=source, nodes=nodes)
+    cfg = validate_document(data, source=source, nodes=nodes, fmt=fmt)
     return build_model(cfg, source=source, nodes=nodes, max_blocks=max_blocks), cfg
 
 

@@ -7,6 +7,7 @@ import difflib
 import re
 import types
 import typing
+from pathlib import Path
 from typing import Annotated, Any
 
 from pydantic import BaseModel, ValidationError
@@ -17,8 +18,13 @@ from .spec import ModelFile
 from .values import document_keys
 
 
-def validate_document(data: dict, *, source: str = "<string>", nodes: Any = None) -> ModelFile:
+def validate_document(
+    data: dict, *, source: str = "<string>", nodes: Any = None, fmt: str | None = None
+) -> ModelFile:
     """Validate parsed data against the file format and its cross-references.
+
+    ``fmt`` ("yaml" or "toml"; default: by the suffix of ``source``) words
+    the fixes in the file's own syntax.
 
     Raises
     ------
@@ -28,7 +34,8 @@ def validate_document(data: dict, *, source: str = "<string>", nodes: Any = None
     try:
         cfg = ModelFile.model_validate(data)
     except ValidationError as exc:
-        raise _from_validation(exc, source, nodes) from None
+        toml = (fmt or Path(source).suffix.lstrip(".")).lower() == "toml"
+        raise _from_validation(exc, source, nodes, toml) from None
     _check_references(cfg, source, nodes)
     _check_unique_names(cfg, source, nodes)
     _check_units(cfg, source, nodes)
@@ -276,7 +283,26 @@ def _short(value: Any) -> str:
     return text if len(text) <= 40 else text[:37] + "..."
 
 
-def _from_validation(exc: ValidationError, source: str, nodes: Any) -> ModelFileError:
+#: the fixes _describe words in YAML, as they read in TOML
+TOML_FIXES = {
+    "write `key: value` lines indented under it": (
+        "write it as a table: a [{path}] header (or [{path}.NAME] ones) above `key = value` lines"
+    ),
+    "write [a, b, ...] or `- ` items": "write [a, b, ...] or [[{path}]] tables",
+}
+
+
+def _in_toml(fix: str, loc: Loc) -> str:
+    """A fix of :func:`_describe` in TOML's syntax."""
+    path = ".".join(str(p) for p in loc if not isinstance(p, int)) or "table"
+    for yaml, toml in TOML_FIXES.items():
+        fix = fix.replace(yaml, toml.format(path=path))
+    return re.sub(r"^add `([^`]*):`", r"add `\1 = ...`", fix)  # `friction_angle = ...`
+
+
+def _from_validation(
+    exc: ValidationError, source: str, nodes: Any, toml: bool = False
+) -> ModelFileError:
     errors = exc.errors(include_url=False)
     # report the most specific error first (deepest key path), and an unknown key
     # before the missing key it is a misspelling of: the cause before its
@@ -294,6 +320,8 @@ def _from_validation(exc: ValidationError, source: str, nodes: Any) -> ModelFile
     errors.sort(key=lambda e: (-len(e["loc"]), not misspelt(e)))
     err = errors[0]
     loc, problem, fix = _describe(err)
+    if toml:
+        fix = _in_toml(fix, loc)
     # the same problem reported twice (both coordinates of a short point) is one
     others = len({(d[0], d[1]) for d in map(_describe, errors)} - {(loc, problem)})
     if others:
