@@ -404,3 +404,25 @@ def test_a_failure_confirmed_below_the_bracket_top_ends_the_bracket():
             # a failure confirmed where the trial's own solve lost equilibrium
             at_factor = trial.evidence.confirmed_at or trial.evidence.failed_at or trial.factor
             assert at_factor >= hi * (1 - 1e-12), (trial, fos)
+
+
+def test_an_unproven_toppling_limit_says_it_depends_on_the_spring_points(limit):
+    """With friction and no dilatancy a toppling limit is not unique: on a
+    14-column Goodman & Bray staircase (treads 25, base 30, face 55, phi 35;
+    Goodman & Bray 0.9289) the DEM read 0.8593 to 0.9681 with 2 to 5 spring
+    points of either rule, each confirmed by relaxation, none proven.  So the
+    result says so wherever the limit is not proven and blocks topple (the
+    JSON's warnings, printed by `rockdem fos`, and the trust statements); a
+    proven sliding limit does not."""
+    from rockdem.result_tables import fos_summary
+    from rockdem.trust import trust_statements
+    from rockdem.verification import block_on_plane
+
+    assert limit.proof != "lp-certificate"
+    doc = fos_summary(limit)
+    caution = [w for w in doc["warnings"] if "a toppling limit is not unique" in w]
+    assert len(caution) == 1 and "3 lobatto points" in caution[0]
+    assert caution[0] in trust_statements(limit.stable_analysis, limit)
+    sliding = rd.factor_of_safety(block_on_plane(35.0, rd.Joint(1e6, 30.0)))
+    assert sliding.proof == "lp-certificate"
+    assert not any("toppling" in w for w in fos_summary(sliding)["warnings"])

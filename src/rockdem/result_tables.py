@@ -42,7 +42,7 @@ from .mechanism import slip_polylines
 from .modes import MODES, boundary_contacts, failure_modes
 from .results import CURRENT_NAMES
 from .spring_law import STATE_NAMES
-from .trust import trust_statements
+from .trust import toppling_caution, trust_statements
 
 __all__ = [
     "analysis_summary",
@@ -361,6 +361,8 @@ def fos_summary(fos) -> dict[str, Any]:
     equilibrium below the limit (:func:`bolt_summary`).
     """
     failed, base = fos.failed_analysis, fos.stable_analysis
+    mechanism = mechanism_summary(failed)
+    mechanism["warnings"] = [*toppling_caution(fos), *mechanism["warnings"]]
     return jsonable(
         {
             "factor_of_safety": fos.value,
@@ -375,7 +377,7 @@ def fos_summary(fos) -> dict[str, Any]:
             "mechanism_blocks": [] if failed is None else [int(i) for i in failed.unstable_blocks],
             "mechanism_factor": None if failed is None else failed.strength_factor,
             "bolts_at_limit": bolt_summary(base),
-            **mechanism_summary(failed),
+            **mechanism,
             "trials": [
                 {
                     "factor": t.factor,

@@ -16,6 +16,39 @@ PROOF_TEXT = {
 }
 
 
+def toppling_caution(fos: FactorOfSafety | None) -> list[str]:
+    """A sentence when the factor of safety is the limit of a mechanism with
+    toppling blocks that the equilibrium LP does not prove.
+
+    With friction and no dilatancy a toppling limit is not unique: the LP
+    finds admissible forces beyond it, and the limit the springs reach
+    depends on how the joints are discretised.  Measured on a 14-column
+    Goodman & Bray staircase (treads 25, base 30, face 55, phi 35; G&B
+    0.9289): 0.9187 / 0.9650 / 0.9681 / 0.8919 with 2 / 3 / 4 / 5 Lobatto
+    points, 0.8593 / 0.9016 with 2 / 3 Gauss points; the bundled toppling
+    example 0.702 with 2 Lobatto points, 0.730 with 3 or 5 (G&B 0.735).
+    """
+    failed = fos.failed_analysis if fos is not None else None
+    if failed is None or fos.value is None or failed.evidence.proof == "lp-certificate":
+        return []
+    from .modes import failure_modes
+
+    modes = failure_modes(failed)
+    toppling = [*modes.blocks("topples"), *modes.blocks("slides and topples")]
+    if not toppling:
+        return []
+    settings = failed.system.model.settings
+    return [
+        f"The mechanism topples ({len(toppling)} block{'s' if len(toppling) > 1 else ''}) and "
+        "the equilibrium LP does not prove its limit: with friction a toppling limit is not "
+        "unique, and it depends on the spring points of the joints (a Goodman & Bray "
+        "staircase, 0.929 by limit equilibrium, read 0.859 to 0.968 with 2 to 5 points; "
+        f"this run: {settings.points_per_interface} {settings.quadrature} points).  Compare "
+        "with analysis.points_per_interface 2 and 5, and with Goodman & Bray's closed form "
+        "(`rockdem le` on a `limit_equilibrium: toppling` case file)."
+    ]
+
+
 def trust_statements(a: Analysis, fos: FactorOfSafety | None = None) -> list[str]:
     """Sentences on the reliability of ``a`` (and of ``fos``), most important first."""
     out = []
@@ -99,6 +132,7 @@ def trust_statements(a: Analysis, fos: FactorOfSafety | None = None) -> list[str
     limit = fos.stable_analysis if fos is not None else None  # the state at the limit
     out += cohesion_lost_in_tension(limit if limit is not None else a)
     out += stiffness_contrast(a)
+    out += toppling_caution(fos)
     if a.system.model.loads.water_table:
         out.append(
             "Water acts on joints below the water table (hydrostatic, on both faces); free "
