@@ -471,6 +471,10 @@ BAD = [
         {"inputs": {"loads.water_table[*][1]": {"distribution": "normal", "mean": 3, "sd": 1}}},
         ["study.inputs.loads.water_table[*][1]", "`loads.water_table` is not in the file"],
     ),
+    (  # found by fuzzing: "slope.profile: required key is missing" (a blocks model)
+        {"inputs": {"slope.seed": {"distribution": "uniform", "min": 0, "max": 100}}},
+        ["study.inputs.slope.seed", "the file has no `slope` section", "does nothing"],
+    ),
     (
         {"inputs": {PHI: {"distribution": "normal", "mean": 33, "sd": 0}}},
         ["study.inputs.joints.plane.friction_angle", "sd = 0 must be > 0"],

@@ -69,6 +69,12 @@ def is_integer_key(loc: Loc) -> bool:
     return _type_at(loc) is int
 
 
+def _all_defaults(section: type) -> bool:
+    """A section the file may leave out: it has no required key (`loads`,
+    `analysis`), unlike `slope`, which is a geometry of its own."""
+    return not any(field.is_required() for field in section.model_fields.values())
+
+
 def resolve(doc: dict, path: str) -> list[Loc]:
     """The places in ``doc`` a key path names (several with ``[*]``).
 
@@ -116,9 +122,15 @@ def resolve(doc: dict, path: str) -> list[Loc]:
             if not more and _numeric_type(here) is not None:
                 found.append(here)  # a number at its default
                 return
-            if more and _is_section(_type_at(here)):
+            section = _type_at(here)
+            if more and _is_section(section) and _all_defaults(section):
                 walk({}, more, here)  # a section at its defaults
                 return
+            if more and _is_section(section):  # (found by fuzzing: slope.seed on blocks)
+                raise ValueError(
+                    f"the file has no `{_keypath(here)}` section, so `{path}` does nothing "
+                    "in this model"
+                )
             raise ValueError(
                 f"`{_keypath(here)}` is not in the file"
                 + (": write it there to vary its items" if more else " and is not a number")
