@@ -811,6 +811,20 @@ def test_a_read_only_out_folder_is_refused_before_computing(tmp_path):
         ro.chmod(0o755)
 
 
+@pytest.mark.parametrize("command", ["report", "run"])
+def test_a_folder_that_refuses_files_is_refused_before_computing(tmp_path, command):
+    """Found by fuzzing: /sys/kernel passes the permission check as root and
+    refused the files only after the analysis (exit 1).  A file is now
+    tried there first (the same folder as user: refused by its bits)."""
+    kernel = Path("/sys/kernel")
+    if not kernel.is_dir():
+        pytest.skip("no /sys/kernel here")
+    (tmp_path / "m.yaml").write_text(BOX)
+    out = kernel if command == "report" else kernel / "results"
+    r = inproc(command, "m.yaml", "--out", out, cwd=tmp_path)
+    assert_refused(r, f"--out {out}", "not writable")
+
+
 def test_example_copy_never_follows_a_link(tmp_path):
     folder = tmp_path / "copy"
     folder.mkdir()

@@ -76,6 +76,21 @@ def _nearest_existing(path: Path) -> Path:
     return path
 
 
+def _writable(folder: Path) -> bool:
+    """A file can be made in ``folder``: tried with an empty temporary file,
+    removed at once (found by fuzzing: permission bits let root "write" into
+    /sys/kernel, which refused the report after its analysis)."""
+    import tempfile
+
+    if not os.access(folder, os.W_OK | os.X_OK):
+        return False
+    try:
+        with tempfile.TemporaryFile(dir=folder, prefix=".rockdem-probe."):
+            return True
+    except OSError:
+        return False
+
+
 def _check_can_create(path: Path, option: str) -> None:
     """``path`` (a file or folder to be made) can be created: its closest existing
     ancestor is a folder we may write into."""
@@ -88,7 +103,7 @@ def _check_can_create(path: Path, option: str) -> None:
             f"cannot be created: {base} is a file, not a folder",
             "give a path in a folder",
         )
-    if not os.access(base, os.W_OK | os.X_OK):
+    if not _writable(base):
         raise InputError(
             f"{option} {path}",
             f"cannot be created: the folder {base} is not writable",
@@ -131,10 +146,10 @@ def _check_out_folder(
     if not folder.exists():
         _check_can_create(folder, option)
         return
-    if not os.access(folder, os.W_OK | os.X_OK):
+    if not _writable(folder):
         raise InputError(where, "is not writable", "give a folder you may write into")
     parent = folder.resolve().parent
-    if temp_beside and not os.access(parent, os.W_OK | os.X_OK):
+    if temp_beside and not _writable(parent):
         raise InputError(
             where,
             f"cannot be written: the results are first written to a temporary folder in "
@@ -188,7 +203,7 @@ def _check_out_file(target: Path, *, inputs: list[Path], option: str = "--out") 
                 f"cannot be created: {target.parent} is a file, not a folder",
                 "give a path in a folder",
             )
-        if not os.access(target.parent, os.W_OK | os.X_OK):
+        if not _writable(target.parent):
             raise InputError(
                 f"{option} {target}",
                 f"cannot be written: the folder {target.parent} is not writable",
