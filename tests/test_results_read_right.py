@@ -848,3 +848,54 @@ def test_trust_notes_a_stiffness_contrast_between_joints():
     assert len(noted(model.replace(joints=stiff))) == 1
     assert "up to 20 times" in noted(model.replace(joints=stiff))[0]
     assert noted(model) == []
+
+
+#: four layers on a bedding plane dipping 35 (c 40 kPa, phi 25) behind a
+#: release joint at x = -22: plane sliding of the whole stack (Hoek & Bray
+#: 1981 ch. 7; Wyllie & Mah 2004 eq. 6.7), FS = (c L + W cos35 tan25) / (W sin35)
+LAYERS_ON_BEDDING = """
+units: kN, m, kPa
+joints:
+  bedding: {normal_stiffness: 1.0e+6, friction_angle: 25.0, cohesion: 40.0,
+    residual_cohesion: null}
+  release: {normal_stiffness: 1.0e+6, friction_angle: 30}
+joint_lines:
+  - {joint: release, point: [-22.0, 0], dip: 90}
+blocks:
+  - {id: 0, fixed: true, vertices: [[30, 0], [0, 0], [-22, 15.4045658], [-22, 20],
+      [-80, 20], [-80, -30], [30, -30]]}
+  - {id: 1, unit_weight: 25.0, vertices: [[0, 0], [-1.90814055, 5.24257308],
+      [-22, 19.3110445], [-22, 15.4045658]]}
+  - {id: 2, unit_weight: 25.0, vertices: [[-1.90814055, 5.24257308],
+      [-3.81628111, 10.4851462], [-17.4049006, 20], [-22, 20], [-22, 19.3110445]]}
+  - {id: 3, unit_weight: 25.0, vertices: [[-3.81628111, 10.4851462],
+      [-5.72442166, 15.7277193], [-11.8258709, 20], [-17.4049006, 20]]}
+  - {id: 4, unit_weight: 25.0, vertices: [[-5.72442166, 15.7277193], [-7.27940469, 20],
+      [-11.8258709, 20]]}
+analysis:
+  strength_reduction: {width: 0.002}
+"""
+
+
+def test_layers_riding_on_a_sliding_layer_are_carried_not_at_a_transition(tmp_path):
+    """Found in a literature cross-check: layers 2-4, riding on layer 1 as it
+    slides on the bedding (their bases closed and below their strength),
+    were listed "at the transition between sliding and toppling ... partly
+    open and partly at its strength"; they are carried by the blocks under
+    them.  The factor of safety is the plane-sliding closed form."""
+    import shapely
+
+    from rockdem.config import parse_model
+    from rockdem.result_tables import fos_summary
+    from rockdem.trust import trust_statements
+
+    model, _ = parse_model(LAYERS_ON_BEDDING, source="layers.yaml")
+    fos = rd.factor_of_safety(model, width=0.002)
+    area = sum(shapely.Polygon(model.blocks.outline(i)).area for i in range(1, 5))
+    W, L, psi, phi = 25.0 * area, np.hypot(22.0, 15.4045658), np.radians(35), np.radians(25)
+    exact = (40.0 * L + W * np.cos(psi) * np.tan(phi)) / (W * np.sin(psi))
+    assert fos.value == pytest.approx(exact, rel=0.002)
+    doc = fos_summary(fos)
+    assert doc["failure_modes"] == {"slides": [1, 2, 3, 4]}
+    assert doc["carried_blocks"] == [2, 3, 4]
+    assert not any("partly open" in t for t in trust_statements(fos.stable_analysis, fos))

@@ -110,6 +110,11 @@ class BlockModes:
         before the limit (sliding or lifted there); otherwise from the
         motion beyond the limit, which is chaotic in its detail for a block
         at the transition between sliding and toppling.
+    carried : ndarray of bool (n_blocks,)
+        Of the blocks not ``decided``: those whose base held at the limit,
+        closed all along and below its strength, on moving blocks (a layer
+        riding on a sliding one): they move with the blocks under them, not
+        at a transition.
     """
 
     code: np.ndarray
@@ -117,6 +122,14 @@ class BlockModes:
     pivot: np.ndarray
     ids: np.ndarray
     decided: np.ndarray
+    carried: np.ndarray | None = None
+
+    @property
+    def at_transition(self) -> np.ndarray:
+        """Moving blocks whose mode is the motion's, at the transition between
+        sliding and toppling (neither decided at the limit nor carried)."""
+        carried = self.carried if self.carried is not None else np.zeros_like(self.decided)
+        return (self.code > 0) & ~self.decided & ~carried
 
     @property
     def name(self) -> np.ndarray:
@@ -181,13 +194,13 @@ def failure_modes(a) -> BlockModes:
     g_code, g_pivot = _group_modes(group, len(groups), A, B, faces, opening, slip, scale, load)
     code[moving] = g_code[group[moving]]
     pivot[moving] = g_pivot[group[moving]]
-    decided = np.zeros(n, dtype=bool)
+    decided = carried = np.zeros(n, dtype=bool)
     if limit is not None:
         points = system.springs.points_per_interface
-        code, pivot, decided = _at_the_limit(
+        code, pivot, decided, carried = _at_the_limit(
             code, pivot, moving, faces, opening, load, limit, points
         )
-    return BlockModes(code, group, pivot, blocks.ids, decided)
+    return BlockModes(code, group, pivot, blocks.ids, decided, carried)
 
 
 def _group_modes(group, n_groups, A, B, faces, opening, slip, scale, load):
@@ -286,6 +299,7 @@ def _at_the_limit(code, pivot, moving, faces, opening, load, limit, points):
     blk = np.concatenate([A, B])
     n_out = np.concatenate([faces.normal, -faces.normal])
     keep = moving[blk]
+    other = np.concatenate([B, A])[keep]
     rows, blk, n_out = rows[keep], blk[keep], n_out[keep]
     f = load[blk]
     size = np.hypot(f[:, 0], f[:, 1])
@@ -311,6 +325,10 @@ def _at_the_limit(code, pivot, moving, faces, opening, load, limit, points):
     lifted = (total > 0) & (total - closed >= LIFTED * total)
     # a block that hops off its base beyond the limit still slid there
     decided = moving & (slipping | lifted)
+    # a base that held, closed all along, on moving blocks: carried by them
+    on_moving = np.bincount(blk, length * moving[other], n)
+    holds = (closed > 0) & (closed >= total) & (on_moving >= total * (1 - 1e-9))
+    carried = moving & ~decided & holds
     out = code.copy()
     out[decided & slipping & ~lifted] = SLIDES
     out[decided & slipping & lifted] = SLIDES_AND_TOPPLES
@@ -327,7 +345,7 @@ def _at_the_limit(code, pivot, moving, faces, opening, load, limit, points):
         closer = opening[r].argmin(1) == 0
         pivot[blk[first]] = np.where(closer[:, None], faces.start[r], faces.end[r])
     pivot[(out == FALLS) | (out == SLIDES) | (out == STABLE)] = np.nan
-    return out, pivot, decided
+    return out, pivot, decided, carried
 
 
 # ----------------------------------------------------------- model boundary

@@ -273,7 +273,8 @@ def mechanism_summary(analysis) -> dict[str, Any]:
     """What the mechanism does: ``failure_modes`` (ids of the moving blocks by
     mode), ``failure_modes_from_motion`` (those whose mode the last
     equilibrium did not decide, read from the run beyond the limit, chaotic
-    in its detail: see :class:`~rockdem.modes.BlockModes`),
+    in its detail: see :class:`~rockdem.modes.BlockModes`), ``carried_blocks``
+    (of those, the ones whose base held on moving blocks: they ride on them),
     ``boundary_contacts`` (where it touches a fixed side of the model),
     ``warnings`` (one sentence each) and ``slip_polylines`` (the slip surface
     as ordered polylines with the stresses of each segment); all empty for a
@@ -282,6 +283,7 @@ def mechanism_summary(analysis) -> dict[str, Any]:
         return {
             "failure_modes": {},
             "failure_modes_from_motion": [],
+            "carried_blocks": [],
             "boundary_contacts": [],
             "warnings": [],
             "slip_polylines": [],
@@ -292,6 +294,7 @@ def mechanism_summary(analysis) -> dict[str, Any]:
     return {
         "failure_modes": {m: ids for m, ids in by_mode.items() if ids},
         "failure_modes_from_motion": [int(i) for i in modes.ids[(modes.code > 0) & ~modes.decided]],
+        "carried_blocks": [int(i) for i in modes.ids[modes.carried]],
         "boundary_contacts": [
             {
                 "side": c.side,

@@ -100,7 +100,7 @@ def trust_statements(a: Analysis, fos: FactorOfSafety | None = None) -> list[str
             from .modes import failure_modes
 
             modes = failure_modes(failed)
-            guessed = modes.ids[(modes.code > 0) & ~modes.decided]
+            guessed = modes.ids[modes.at_transition]
             if 0 < guessed.size < int((modes.code > 0).sum()):
                 ids = ", ".join(str(i) for i in guessed[:20]) + (
                     ", ..." if guessed.size > 20 else ""

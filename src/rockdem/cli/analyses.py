@@ -284,13 +284,19 @@ def _print_mechanism(doc: dict[str, Any]) -> None:
         out.print("  failure modes:")
         for mode, ids in modes.items():
             out.print(f"    {mode} ({len(ids)}): {_ids(ids, 20)}")
-    guessed = doc.get("failure_modes_from_motion") or []
+    carried = doc.get("carried_blocks") or []
+    guessed = [i for i in doc.get("failure_modes_from_motion") or [] if i not in carried]
     moving = sum(len(ids) for ids in modes.values())
     if guessed and len(guessed) < moving:  # some at the transition: say which
         out.print(
             f"  at the transition between sliding and toppling ({len(guessed)}): "
             f"{_ids(guessed, 20)} (their base was partly open and partly at its strength at "
             "the limit; their mode is the motion's beyond it, which is chaotic in its detail)"
+        )
+    if carried and len(carried) < moving:
+        out.print(
+            f"  carried by the blocks under them ({len(carried)}): {_ids(carried, 20)} (their "
+            "base held at the limit: they move with those blocks)"
         )
     for text in doc.get("warnings") or []:
         out.print(f"[bold yellow]warning[/bold yellow]: {escape(text)}")
