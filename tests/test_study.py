@@ -207,6 +207,17 @@ def test_a_sweep_over_two_inputs_is_the_closed_form_on_its_grid(tmp_path):
     assert (tmp_path / "sweep" / "sweep.png").stat().st_size > 0
 
 
+def test_a_sweep_over_the_spring_points_runs_each_rule(tmp_path):
+    """The toppling warning sends users to this sweep to see how their limit
+    depends on the spring points; a sliding block's does not (the closed form
+    at every rule)."""
+    spec = {"sweep": {"analysis.points_per_interface": {"values": [2, 3, 5]}}}
+    table, _ = rockdem.study(plane_document(), spec, workers=0, out=tmp_path / "points")
+    assert table["analysis.points_per_interface"].tolist() == [2, 3, 5]
+    exact = sliding_fos(PSI, 33.0)
+    assert np.allclose(table["fs"].to_numpy(dtype=float), exact, rtol=0.005)
+
+
 # ------------------------------------------------------------------ sampling
 def test_distributions_correlation_and_seeds():
     spec = StudySpec.model_validate(

@@ -44,7 +44,8 @@ def toppling_caution(fos: FactorOfSafety | None) -> list[str]:
         "unique, and it depends on the spring points of the joints (a Goodman & Bray "
         "staircase, 0.929 by limit equilibrium, read 0.859 to 0.968 with 2 to 5 points; "
         f"this run: {settings.points_per_interface} {settings.quadrature} points).  Compare "
-        "with analysis.points_per_interface 2 and 5, and with Goodman & Bray's closed form "
+        "with 2 and 5 points (`rockdem study` of the file with `study: {sweep: "
+        "{analysis.points_per_interface: {values: [2, 3, 5]}}}`) and with Goodman & Bray "
         "(`rockdem le` on a `limit_equilibrium: toppling` case file)."
     ]
 
