@@ -21,7 +21,8 @@ from dataclasses import dataclass
 
 __all__ = ["UNKNOWN", "Units", "contradiction", "parse_units"]
 
-FORCES = ("N", "kN", "MN", "GN", "t", "tf", "kgf", "lbf", "kip", "kips")
+#: ("lb" as engineers write it for a pound-force: "lb, ft, psf")
+FORCES = ("N", "kN", "MN", "GN", "t", "tf", "kgf", "lbf", "lb", "kip", "kips")
 LENGTHS = ("m", "mm", "cm", "km", "ft", "in")
 #: stress units named as such (a "force/length^2" token is recognised too)
 STRESSES = ("Pa", "kPa", "MPa", "GPa", "psi", "psf", "ksi", "ksf")
@@ -87,6 +88,40 @@ def _stress_token(tok: str) -> str | None:
     if m and m.group(1) in FORCES and m.group(2) in LENGTHS:
         return f"{m.group(1)}/{m.group(2)}^2"
     return None
+
+
+#: forces and lengths in newtons and metres (for the unit weight of water)
+_NEWTONS = {"N": 1.0, "kN": 1e3, "MN": 1e6, "GN": 1e9, "t": 9806.65, "tf": 9806.65}
+_NEWTONS |= {"kgf": 9.80665, "lbf": 4.4482216, "lb": 4.4482216, "kip": 4448.2216}
+_NEWTONS |= {"kips": 4448.2216}
+_METRES = {"m": 1.0, "mm": 1e-3, "cm": 1e-2, "km": 1e3, "ft": 0.3048, "in": 0.0254}
+
+
+def water_unit_weight(note: str | None) -> float | None:
+    """The unit weight of water in the units a ``units`` note names, to three
+    figures (9.81 kN/m^3, 1 t/m^3, 62.4 lbf/ft^3); None when the note names
+    no force and length unit."""
+    u = parse_units(note)
+    if not u.known:
+        return None
+    value = 9806.65 * _METRES[u.length] ** 3 / _NEWTONS[u.force]
+    return float(f"{value:.3g}")
+
+
+def _tokens(note: str) -> list[str]:
+    """The words of a ``units`` note up to its first parenthesis."""
+    text = note.split("(", 1)[0]
+    return [t for t in re.split(r"[,;\s]+|(?<=[A-Za-z0-9])-(?=[A-Za-z])", text) if t]
+
+
+def length_of(note: str | None) -> str | None:
+    """The length unit a ``units`` note names, with or without a force unit
+    (a drawing is converted to it: found by fuzzing, ``units: ft`` and
+    ``units: lb, ft, psf`` drawings were read in metres)."""
+    lengths = [t for t in _tokens(note or "") if t in LENGTHS]
+    if len(lengths) > 1 and lengths[0] == "in":  # "units in kN and m": a word, not inches
+        lengths = lengths[1:]
+    return lengths[0] if lengths else None
 
 
 def parse_units(note: str | None) -> Units:

@@ -98,7 +98,7 @@ def with_dxf_blocks(cfg: Any, source: str, nodes: Any, max_blocks: int | None) -
     """
     from ..exchange.dxf_cut import cut_section
     from ..exchange.dxf_in import DxfError, read_section
-    from ..units import parse_units
+    from ..units import length_of
     from .sections import BlockSpec, BoltSpec, JointLineSpec, SupportSpec
 
     g = cfg.geometry
@@ -116,7 +116,7 @@ def with_dxf_blocks(cfg: Any, source: str, nodes: Any, max_blocks: int | None) -
             path,
             layers=layers,
             joints=list(cfg.joints),
-            length_unit=parse_units(cfg.units).length,
+            length_unit=length_of(cfg.units),
         )
         cut = cut_section(section, max_blocks=max_blocks)
     except DxfError as exc:

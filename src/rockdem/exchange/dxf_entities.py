@@ -120,7 +120,9 @@ def _scale(doc, length_unit: str | None, source: str) -> tuple[int, float]:
         return insunits, 1.0
     try:
         factor = float(conversion_factor(insunits, target))
-    except (KeyError, ValueError, IndexError, ZeroDivisionError):
+    except (KeyError, ValueError, IndexError, ZeroDivisionError, TypeError):
+        # (TypeError: ezdxf's "Unsupported conversion" for US survey feet, 21,
+        # microinches, 8, and the like; found by fuzzing: exit 1)
         raise _fail(
             source,
             f"$INSUNITS = {insunits} is not a unit of length rockdem can convert",
