@@ -171,6 +171,50 @@ def test_insunits_millimetres_are_converted_to_metres(tmp_path):
     assert read_section(raw).scale == 1.0
 
 
+@pytest.mark.parametrize("note", ["lb, ft, psf", "lbf, ft, psf", "ft", "kips, ft, ksf"])
+def test_a_drawing_in_feet_is_read_in_the_length_the_units_name(tmp_path, note):
+    """Found by fuzzing: a feet drawing was converted to metres when the
+    `units` note named no force unit rockdem knew ("lb, ft, psf", or only
+    "ft"): 16.07 instead of 173 ft^2 of rock, FS 2.84 instead of 1.52."""
+    draw(tmp_path, "ft.dxf", insunits=2)
+    model = MODEL.replace("units: kN, m, kPa", f"units: {note}").replace("section.dxf", "ft.dxf")
+    (tmp_path / "ft.yaml").write_text(model)
+    loaded, _ = load_model(tmp_path / "ft.yaml")
+    draw(tmp_path, "m.dxf")
+    (tmp_path / "m.yaml").write_text(MODEL.replace("section.dxf", "m.dxf"))
+    metres, _ = load_model(tmp_path / "m.yaml")
+    # the same numbers: the drawing is in the file's own length unit
+    assert loaded.blocks.area.sum() == pytest.approx(metres.blocks.area.sum(), rel=1e-12)
+
+
+@pytest.mark.parametrize("code", [21, 8, 9])
+def test_a_drawing_unit_rockdem_cannot_convert_is_refused(tmp_path, code):
+    """Found by fuzzing: $INSUNITS 21 (US survey feet), 8 or 9 stopped with
+    "the analysis failed: TypeError: Unsupported conversion" (exit 1)."""
+    dxf = draw(tmp_path, insunits=code)
+    assert_refused(invoke("import", dxf), f"$INSUNITS = {code} is not a unit of length")
+
+
+@pytest.mark.parametrize(
+    ("note", "rock", "gamma_w"),
+    [("kN, m, kPa", 26, 9.81), ("t, m, t/m^2", 2.65, 1.0), ("lbf, ft, psf", 165, 62.4)],
+)
+def test_an_imported_water_table_gets_the_water_of_the_template_units(
+    tmp_path, note, rock, gamma_w
+):
+    """Found by fuzzing: the import wrote water_unit_weight 9.81 (kN and m)
+    beside a template in lbf and ft (FS 1.057 instead of 0.921), and a t/m
+    template was then refused for rock and water in different units."""
+    dxf = draw(tmp_path)
+    template = MODEL.replace("units: kN, m, kPa", f"units: {note}")
+    template = template.replace("unit_weight: 26", f"unit_weight: {rock}")
+    template = template.replace("loads: {water_unit_weight: 9.81}\n", "")
+    (tmp_path / "t.yaml").write_text(template.replace("geometry: {dxf: section.dxf}\n", ""))
+    text, _, _ = model_text(dxf, template=tmp_path / "t.yaml")
+    model, _ = parse_model(text)
+    assert model.loads.water_unit_weight == gamma_w
+
+
 def _traces(path: Path) -> dict[str, list[np.ndarray]]:
     """Segments on the JOINT_ layers of a drawing (LINEs and polyline pieces)."""
     doc = ezdxf.readfile(path)

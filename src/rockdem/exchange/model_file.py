@@ -10,6 +10,7 @@ from typing import Any
 
 import numpy as np
 
+from ..units import water_unit_weight
 from .dxf_cut import cut_section
 from .dxf_in import DxfError, Section, SectionBlocks, read_section
 
@@ -108,7 +109,17 @@ def model_document(
     loads = dict(base.pop("loads", {}))
     if section.water_table is not None:
         loads["water_table"] = _FlowList(_floats(section.water_table))
-        loads.setdefault("water_unit_weight", 9.81)
+        if "water_unit_weight" not in loads:
+            # in the file's units (found by fuzzing: 9.81 was written beside lbf and ft)
+            gamma_w = water_unit_weight(str(doc["units"]))
+            if gamma_w is None:
+                raise _fail(
+                    section.source,
+                    f"the drawing has a water table, and the units {doc['units']!r} name no "
+                    "force and length to give the unit weight of water in",
+                    "give loads.water_unit_weight in the template (9.81 for kN and m)",
+                )
+            loads["water_unit_weight"] = gamma_w
     if loads:
         doc["loads"] = loads
     supports = list(base.pop("supports", []))
@@ -176,11 +187,11 @@ def model_text(
     length_unit = None
     if template is not None:
         from ..config import read_document
-        from ..units import parse_units
+        from ..units import length_of
 
         tpl, _ = read_document(template)
         joints = list(tpl.get("joints") or {}) or None
-        length_unit = parse_units(str(tpl.get("units", ""))).length
+        length_unit = length_of(str(tpl.get("units", "")))
     section = read_section(path, layers=layers, joints=joints, length_unit=length_unit)
     blocks = cut_section(section, max_blocks=max_blocks)
     doc = model_document(section, blocks, template=tpl, name=name, bolt_force=bolt_force, bolt=bolt)
