@@ -218,6 +218,35 @@ def test_a_sweep_over_the_spring_points_runs_each_rule(tmp_path):
     assert np.allclose(table["fs"].to_numpy(dtype=float), exact, rtol=0.005)
 
 
+def test_samples_without_a_factor_are_ranked_not_dropped(tmp_path):
+    """Found by fuzzing: a block tipped by kh 0.9 with vertical accelerations
+    from -0.99 to 0.5: 12 of 40 samples fail at any strength (no factor);
+    P(FS < 1) counted them, but the mean, the percentiles and the rank
+    correlation were of the other 28 without a word, the 5% among them."""
+    doc = plane_document(0.0)
+    doc["loads"] = {"seismic_h": 0.9}
+    spec = {
+        "samples": 40,
+        "seed": 3,
+        "inputs": {"loads.seismic_v": {"distribution": "uniform", "min": -0.99, "max": 0.5}},
+    }
+    table, s = rockdem.study(doc, spec, workers=0, out=tmp_path / "kh")
+    none = int((table["mode"] == "strength-independent").sum())
+    assert none > 2  # 40 x 5%: the 5% lies among them
+    f = s["fs"]
+    assert f["without_factor"] == {"strength-independent": none, "no-failure": 0}
+    assert f["n"] == 40 - none and f["p05"] is None and f["min"] is None
+    assert s["reliability_index"]["normal"] is None  # no mean and sd of all samples
+    from rockdem.studies.stats import fs_line
+
+    line = fs_line(f)
+    assert "5% fails at any strength" in line and f"{none} fail at any strength" in line
+    # they have the largest upward accelerations and rank lowest: kv and FS
+    # rise together
+    rho = s["sensitivity"][0]["spearman"]
+    assert rho > 0.9
+
+
 # ------------------------------------------------------------------ sampling
 def test_distributions_correlation_and_seeds():
     spec = StudySpec.model_validate(

@@ -179,11 +179,9 @@ def _print_summary(s: dict) -> None:
         )
     f = s.get("fs")
     if f:
-        out.print(
-            f"factor of safety: mean {f['mean']:.4g}, sd {_g(f['sd'])}, "
-            f"5% {f['p05']:.4g}, median {f['median']:.4g}, 95% {f['p95']:.4g} "
-            f"(min {f['min']:.4g}, max {f['max']:.4g})"
-        )
+        from ..studies.stats import fs_line
+
+        out.print(f"factor of safety: {escape(fs_line(f))}")
     beta = s.get("reliability_index") or {}
     if beta.get("normal") is not None or beta.get("from_pf") is not None:
         out.print(

@@ -8,6 +8,7 @@ from pathlib import Path
 
 from ..report_html import esc, html_table, num
 from .plots import figures
+from .stats import fs_line
 
 
 def html_section(study, fig: Callable[..., str]) -> list[str]:
@@ -45,8 +46,7 @@ def html_section(study, fig: Callable[..., str]) -> list[str]:
         rows.append(
             (
                 "factor of safety",
-                f"mean {num(f['mean'])}, sd {num(f['sd'])}, 5% {num(f['p05'])}, "
-                f"median {num(f['median'])}, 95% {num(f['p95'])} ({f['n']} values)",
+                fs_line(f),
             )
         )
     beta = s.get("reliability_index") or {}
