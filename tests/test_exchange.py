@@ -215,6 +215,22 @@ def test_an_imported_water_table_gets_the_water_of_the_template_units(
     assert model.loads.water_unit_weight == gamma_w
 
 
+def test_a_study_of_a_drawn_model_is_another_study_once_the_drawing_changes(tmp_path):
+    """Found by fuzzing: a study rerun after its drawing was corrected printed
+    the old statistics ("all done before"), and a resumed one mixed rows cut
+    from the two drawings; only the model file's text was compared."""
+    pytest.importorskip("pyarrow")
+    draw(tmp_path)
+    (tmp_path / "model.yaml").write_text(MODEL)
+    spec = {"sweep": {"joints.bedding.friction_angle": {"values": [30, 34]}}}
+    out = tmp_path / "out"
+    rd.study(tmp_path / "model.yaml", spec, workers=0, out=out)
+    rd.study(tmp_path / "model.yaml", spec, workers=0, out=out)  # the same: resumed
+    draw(tmp_path, shift=(0.0, 0.5))  # the drawing corrected
+    with pytest.raises(rd.InputError, match="results of another study"):
+        rd.study(tmp_path / "model.yaml", spec, workers=0, out=out)
+
+
 def _traces(path: Path) -> dict[str, list[np.ndarray]]:
     """Segments on the JOINT_ layers of a drawing (LINEs and polyline pieces)."""
     doc = ezdxf.readfile(path)

@@ -152,6 +152,9 @@ def prepare(model, spec=None, *, max_blocks: int | None = MAX_BLOCKS) -> Plan:
     key = {
         "model": data,
         "study": parsed.model_dump(mode="json", exclude={"worst", "confidence"}),
+        # the drawing the model is cut from (found by fuzzing: a changed drawing
+        # was taken for the same study, and a resumed one mixed the two)
+        "drawing": _drawing_digest(cfg, source),
     }
     text = json.dumps(key, sort_keys=True, default=str, allow_nan=True)
     fingerprint = hashlib.sha256(text.encode()).hexdigest()
@@ -167,3 +170,12 @@ def sample_values(plan: Plan, sample: int) -> list:
 def sample_document(plan: Plan, sample: int) -> dict:
     """The model file of one sample (parsed data, without the study section)."""
     return keypath.apply(plan.base, plan.places, sample_values(plan, sample))
+
+
+def _drawing_digest(cfg, source: str) -> str | None:
+    """SHA-256 of the DXF drawing a ``geometry: {dxf: ...}`` model is cut from."""
+    if cfg.geometry is None:
+        return None
+    from ..config.geometry import dxf_path
+
+    return hashlib.sha256(Path(dxf_path(cfg, source)).read_bytes()).hexdigest()
