@@ -215,7 +215,7 @@ def test_an_imported_water_table_gets_the_water_of_the_template_units(
     assert model.loads.water_unit_weight == gamma_w
 
 
-def test_a_study_of_a_drawn_model_is_another_study_once_the_drawing_changes(tmp_path):
+def test_a_study_of_a_drawn_model_replays_and_sees_its_drawing_change(tmp_path):
     """Found by fuzzing: a study rerun after its drawing was corrected printed
     the old statistics ("all done before"), and a resumed one mixed rows cut
     from the two drawings; only the model file's text was compared."""
@@ -226,6 +226,12 @@ def test_a_study_of_a_drawn_model_is_another_study_once_the_drawing_changes(tmp_
     out = tmp_path / "out"
     rd.study(tmp_path / "model.yaml", spec, workers=0, out=out)
     rd.study(tmp_path / "model.yaml", spec, workers=0, out=out)  # the same: resumed
+    # the worst samples' files replay: they find the drawing from worst/
+    # (found by fuzzing: they named it as the model file did, from its folder)
+    worst = sorted((out / "worst").glob("sample-*.yaml"))
+    assert worst
+    replayed, _ = load_model(worst[0])
+    assert replayed.blocks.n_blocks == load_model(tmp_path / "model.yaml")[0].blocks.n_blocks
     draw(tmp_path, shift=(0.0, 0.5))  # the drawing corrected
     with pytest.raises(rd.InputError, match="results of another study"):
         rd.study(tmp_path / "model.yaml", spec, workers=0, out=out)

@@ -42,7 +42,7 @@ def write_sample_model(path: Path, plan: Plan, sample: int, row) -> None:
     """Sample ``sample``'s model file, headed by its inputs and result (replayable)."""
     import yaml
 
-    doc = sample_document(plan, sample)
+    doc = _drawing_from(sample_document(plan, sample), plan.source, path.parent)
     fs = row["fs"]
     head = [
         f"# rockdem study: sample {sample} of {plan.source}",
@@ -54,3 +54,23 @@ def write_sample_model(path: Path, plan: Plan, sample: int, row) -> None:
     ]
     text = "\n".join(head) + yaml.safe_dump(doc, sort_keys=False, allow_unicode=True)
     _atomic_write(path, lambda tmp: tmp.write_text(text, encoding="utf-8"))
+
+
+def _drawing_from(doc: dict, source: str, folder: Path) -> dict:
+    """``doc`` with its drawing (``geometry.dxf``, relative to the model file)
+    named from ``folder``, where the sample's file is written (found by
+    fuzzing: `rockdem fos worst/sample-....yaml` did not find the drawing)."""
+    import os
+
+    geometry = doc.get("geometry")
+    if not isinstance(geometry, dict) or not geometry.get("dxf") or source.startswith("<"):
+        return doc
+    drawing = Path(str(geometry["dxf"])).expanduser()
+    if not drawing.is_absolute():
+        drawing = Path(source).parent / drawing
+    drawing = drawing.resolve()
+    try:
+        name = os.path.relpath(drawing, folder.resolve())
+    except ValueError:  # another drive
+        name = str(drawing)
+    return {**doc, "geometry": {**geometry, "dxf": name}}
