@@ -249,16 +249,24 @@ def test_pictures_one_per_trial(tmp_path):
 
 def test_a_factor_only_known_to_exceed_the_search_does_not_meet_a_higher_target():
     """A block on a plane with FS = tan 45 / tan 3.18 = 18 (Hoek & Bray 1981,
-    ch. 7): the design rating searches up to F = 20 and stops at '> 13.3' or
-    so; that meets a target of 10, and is no evidence for a target of 20."""
-    from rockdem.stabilisation.removal import meets, rate
+    ch. 7).  The design rating searches beyond every target allowed (20): it
+    finds 18, which meets a target of 10 and not one of 20 (found by fuzzing:
+    it stopped at 17.09 of 20, and a flat block that never fails could not
+    meet a target of 18).  A search stopped short ('> 6.6' of 10) is no
+    evidence for a target above it."""
+    from rockdem.stabilisation.removal import MAX_TARGET, meets, rate
     from rockdem.verification import block_on_plane
 
     dip = np.degrees(np.arctan(1 / 18))
-    fos = rate(block_on_plane(dip, rd.Joint(normal_stiffness=1e6, friction_angle=45)))
-    assert fos.mode == "no-failure" and fos.bracket[0] < 18
-    assert meets(fos, 10.0)
-    assert not meets(fos, 20.0)
+    model = block_on_plane(dip, rd.Joint(normal_stiffness=1e6, friction_angle=45))
+    fos = rate(model)
+    assert fos.value == pytest.approx(18.0, rel=0.01)
+    assert meets(fos, 10.0) and not meets(fos, MAX_TARGET)
+    short = rate(model, largest=10.0)
+    assert short.mode == "no-failure" and short.bracket[0] < 10.0
+    assert meets(short, 5.0) and not meets(short, 10.0)
+    flat = rate(block_on_plane(0.0, rd.Joint(normal_stiffness=1e6, friction_angle=30)))
+    assert flat.mode == "no-failure" and meets(flat, MAX_TARGET)
 
 
 def test_a_slope_that_never_fails_needs_no_support_and_says_so():
@@ -266,9 +274,7 @@ def test_a_slope_that_never_fails_needs_no_support_and_says_so():
     force was sized (it was an error, exit 2, before)."""
     from rockdem.verification import block_on_plane
 
-    model = block_on_plane(
-        np.degrees(np.arctan(1 / 18)), rd.Joint(normal_stiffness=1e6, friction_angle=45)
-    )
+    model = block_on_plane(0.0, rd.Joint(normal_stiffness=1e6, friction_angle=30))
     rows = {m.kind: m for m in compare_measures(model, 1.3).measures}
     assert rows["none"].reached and rows["support"].reached
     assert rows["support"].note.startswith("none sized: no failure mechanism")
