@@ -139,6 +139,38 @@ def test_a_stiffness_contrast_the_solver_cannot_trust_is_refused():
             assert rd.build_system(model).interfaces.n_interfaces > 0
 
 
+def _slope(**change):
+    from rockdem.geometry import JointSet, Profile, generate_slope
+
+    sets = [JointSet("a", 30.0, 2.0, _joint())]
+    args = {"joint_sets": sets, "depth": 5.0, **change}
+    return generate_slope(Profile.simple(height=10.0, face_angle=60.0), **args)
+
+
+@pytest.mark.parametrize(
+    "change,where",
+    [
+        ({"seed": -1}, "generate_slope seed"),
+        ({"seed": 1.5}, "generate_slope seed"),
+        ({"joint_sets": "one"}, "joint set"),
+    ],
+)
+def test_bad_slope_generation_arguments_are_refused(change, where):
+    """Found by fuzzing the API: a negative or fractional seed was numpy's
+    ValueError or TypeError."""
+    assert _slope().blocks.n_blocks > 1
+    with pytest.raises(rd.InputError) as err:
+        _slope(**change)
+    assert str(err.value).startswith(where)
+
+
+def test_one_joint_set_for_a_list_is_refused():
+    from rockdem.geometry import JointSet
+
+    with pytest.raises(rd.InputError, match="is one JointSet, not a list"):
+        _slope(joint_sets=JointSet("a", 30.0, 2.0, _joint()))
+
+
 def _model():
     return rd.Model(_blocks(GROUND, BLOCK), _joint())
 
@@ -169,6 +201,32 @@ def _model():
         (
             lambda: rd.Blocks.from_polygons([GROUND, BLOCK], unit_weight=[1, 2, 3]),
             "blocks unit_weight",
+        ),
+        # found by fuzzing the API at stop 30: gravity="no" was truthy (gravity
+        # on); the rest were numpy, shapely or attribute errors in the analysis,
+        # 1e300 a flood of RuntimeWarnings, a negative anchor force reversed
+        (lambda: rd.Loads(gravity="no"), "loads gravity"),
+        (lambda: rd.Loads(seismic_h="0.1"), "loads seismic_h"),
+        (lambda: rd.Loads(pore_pressure_ratio=None), "loads pore_pressure_ratio"),
+        (lambda: rd.Loads(water_table="(0, 0), (1, 0)"), "loads water_table"),
+        (lambda: rd.Loads(points=((0.5, 1.0, 0.0, -1.0),)), "loads points[0]"),
+        (lambda: rd.Model(_blocks(GROUND, BLOCK), _joint(), loads={}), "model loads"),
+        (lambda: rd.Model(_blocks(GROUND, BLOCK), _joint(), bolts="B1"), "model bolts"),
+        (
+            lambda: rd.Model(
+                _blocks(GROUND, BLOCK),
+                _joint(),
+                joint_lines=[((0.0, float("nan")), (1.0, 0.0))],
+                line_joint=[0],
+            ),
+            "model joint_lines",
+        ),
+        (lambda: rd.PointLoad(0.5, 1.0, -1e300, 0.0), "point load fx"),
+        (lambda: rd.PointLoad.anchor(0.5, 1.0, -10.0, 195.0), "point load force"),
+        (lambda: rd.LineLoad((float("nan"), 1.0), (1.0, 1.0), 0.0, -5.0), "line load start"),
+        (
+            lambda: rd.Bolt(head="1,0.5", angle=270, length=2, capacity=5, axial_stiffness=1e4),
+            "bolts",
         ),
     ],
 )

@@ -87,7 +87,10 @@ class Bolt:
 
     def __post_init__(self) -> None:
         where = f"bolts {self.name}" if self.name else "bolts"
-        head = tuple(float(v) for v in np.asarray(self.head, dtype=float).ravel())
+        try:
+            head = tuple(float(v) for v in np.asarray(self.head, dtype=float).ravel())
+        except (TypeError, ValueError):  # (found by fuzzing: head="1,0.5")
+            head = ()
         if len(head) != 2 or not np.all(np.isfinite(head)):
             raise InputError(where, f"head {self.head!r} is not a point", "give [x, y]")
         object.__setattr__(self, "head", head)

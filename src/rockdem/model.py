@@ -35,12 +35,28 @@ class PointLoad:
     support: bool = False
     name: str = ""
 
+    def __post_init__(self) -> None:
+        where = f"point load {self.name}".rstrip()
+        for key in ("x", "y", "fx", "fy"):
+            object.__setattr__(self, key, _finite(f"{where} {key}", getattr(self, key)))
+        for key in ("fx", "fy"):  # (found by fuzzing: 1e300 gave 228,106 RuntimeWarnings)
+            if abs(getattr(self, key)) > MAX_FORCE:
+                raise InputError(
+                    f"{where} {key}", f"{getattr(self, key):g} is out of range", "give <= 1e15"
+                )
+
     @classmethod
     def anchor(cls, x: float, y: float, force: float, angle: float, name: str = "") -> PointLoad:
         """A support force of magnitude ``force`` acting at ``angle`` degrees
         counter-clockwise from +x (for example 195 = 180 + 15 pulls a face
         that looks toward +x back into the slope, 15 degrees below the
         horizontal, as an anchor drilled downward does)."""
+        where = f"point load {name}".rstrip()
+        force, angle = _finite(f"{where} force", force), _finite(f"{where} angle", angle)
+        if force < 0:  # (found by fuzzing: it reversed the direction without a word)
+            raise InputError(
+                f"{where} force", f"{force:g} is negative", "give its size; the angle gives the way"
+            )
         a = np.radians(angle)
         return cls(x, y, force * np.cos(a), force * np.sin(a), support=True, name=name)
 
@@ -61,6 +77,27 @@ class LineLoad:
     qy: float
     name: str = ""
     q_end: tuple[float, float] | None = None
+
+    def __post_init__(self) -> None:
+        where = f"line load {self.name}".rstrip()
+        for key in ("start", "end"):  # (found by fuzzing: NaN was a GEOSException)
+            point = getattr(self, key)
+            if isinstance(point, str | bytes) or np.size(point) != 2:
+                raise InputError(f"{where} {key}", f"{point!r} is not a point", "give (x, y)")
+            xy = tuple(_finite(f"{where} {key}", v) for v in np.ravel(point))
+            object.__setattr__(self, key, xy)
+        for key in ("qx", "qy"):
+            value = _finite(f"{where} {key}", getattr(self, key))
+            if abs(value) > MAX_FORCE:
+                raise InputError(f"{where} {key}", f"{value:g} is out of range", "give <= 1e15")
+            object.__setattr__(self, key, value)
+        if self.q_end is not None:
+            q = tuple(_finite(f"{where} q_end", v) for v in np.ravel(self.q_end))
+            if len(q) != 2 or max(map(abs, q)) > MAX_FORCE:
+                raise InputError(
+                    f"{where} q_end", f"{self.q_end!r} is not a traction", "give (qx, qy)"
+                )
+            object.__setattr__(self, "q_end", q)
 
     def traction(self, t: np.ndarray) -> np.ndarray:
         """The traction at fractions ``t`` of the way from start to end, (n, 2)."""
@@ -107,6 +144,29 @@ class Loads:
     pore_pressure_ratio: float = 0.0
 
     def __post_init__(self) -> None:
+        # (found by fuzzing: gravity="no" was truthy, gravity on; "0.1" for a
+        # coefficient was a numpy TypeError)
+        if not isinstance(self.gravity, bool | np.bool_):
+            raise InputError(
+                "loads gravity", f"{self.gravity!r} is not True or False", "give a bool"
+            )
+        for key in ("seismic_h", "seismic_v", "water_unit_weight", "pore_pressure_ratio"):
+            object.__setattr__(self, key, _number(f"loads {key}", getattr(self, key)))
+        for key, kind in (("points", PointLoad), ("lines", LineLoad)):
+            items = getattr(self, key)
+            if isinstance(items, str | bytes | dict) or not hasattr(items, "__iter__"):
+                raise InputError(
+                    f"loads {key}", f"{items!r} is not a list", f"give {kind.__name__}s"
+                )
+            odd = [i for i, item in enumerate(items) if not isinstance(item, kind)]
+            if odd:
+                raise InputError(
+                    f"loads {key}[{odd[0]}]",
+                    f"{items[odd[0]]!r} is not a {kind.__name__}",
+                    f"make it with rockdem.{kind.__name__}",
+                )
+        if isinstance(self.water_table, str | bytes):
+            raise InputError("loads water_table", "is text", "give a list of (x, y) points")
         for key in ("seismic_h", "seismic_v"):
             v = getattr(self, key)
             if not np.isfinite(v) or abs(v) >= 1.0:
@@ -143,6 +203,28 @@ class Loads:
                     else f"{gw} is not a positive unit weight",
                     "give the unit weight of water in the model's units (9.81 kN/m^3, 1 t/m^3)",
                 )
+
+
+#: largest force or traction (the model file's range)
+MAX_FORCE = 1e15
+
+
+def _finite(where: str, value) -> float:
+    """``value`` as a finite float (see :func:`_number`)."""
+    v = _number(where, value)
+    if not np.isfinite(v):
+        raise InputError(where, f"{v} is not finite", "give a finite number")
+    return v
+
+
+def _number(where: str, value) -> float:
+    """``value`` as a float; an InputError naming ``where`` for text, None, a bool."""
+    if isinstance(value, str | bytes | bool | np.bool_) or value is None:
+        raise InputError(where, f"{value!r} is not a number", "give a number")
+    try:
+        return float(value)
+    except (TypeError, ValueError):
+        raise InputError(where, f"{value!r} is not a number", "give a number") from None
 
 
 #: Most load steps and Newton iterations per solve (every count of work is bounded).
@@ -278,7 +360,23 @@ class Model:
                 f"{type(self.blocks).__name__} is not rockdem Blocks",
                 "make them with rockdem.Blocks.from_polygons",
             )
-        object.__setattr__(self, "bolts", tuple(self.bolts))
+        if not isinstance(self.loads, Loads):  # (found by fuzzing: a dict, then AttributeError)
+            raise InputError(
+                "model loads",
+                f"{self.loads!r} is not rockdem Loads",
+                "make them with rockdem.Loads",
+            )
+        bolts = self.bolts
+        if isinstance(bolts, str | bytes | dict) or not hasattr(bolts, "__iter__"):
+            raise InputError("model bolts", f"{bolts!r} is not a list", "give rockdem.Bolt objects")
+        object.__setattr__(self, "bolts", tuple(bolts))
+        odd = [i for i, b in enumerate(self.bolts) if not isinstance(b, Bolt)]
+        if odd:
+            raise InputError(
+                f"model bolts[{odd[0]}]",
+                f"{self.bolts[odd[0]]!r} is not a Bolt",
+                "give rockdem.Bolt",
+            )
         given = self.joints
         if isinstance(given, Joint):
             joints = (given,)
@@ -301,7 +399,16 @@ class Model:
         if self.ground is not None:
             object.__setattr__(self, "ground", self.joint_index(self.ground))
         if self.joint_lines is not None:
-            lines = np.asarray(self.joint_lines, dtype=float).reshape(-1, 2, 2)
+            try:
+                lines = np.asarray(self.joint_lines, dtype=float).reshape(-1, 2, 2)
+            except (TypeError, ValueError):
+                lines = np.full((1, 2, 2), np.nan)
+            if not np.isfinite(lines).all():  # (found by fuzzing: NaN was a GEOSException)
+                raise InputError(
+                    "model joint_lines",
+                    "are not pairs of finite points",
+                    "give [((x0, y0), (x1, y1)), ...]",
+                )
             if self.line_joint is None or len(self.line_joint) != len(lines):
                 raise InputError("model line_joint", "needs one joint per line", "list them")
             idx = tuple(self.joint_index(j) for j in self.line_joint)

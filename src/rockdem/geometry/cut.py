@@ -145,8 +145,19 @@ def generate_slope(
         profile = profile.extended(left=_positive("generate_slope behind", behind))
     gamma = float(unit_weight)
     if not (math.isfinite(gamma) and gamma >= 0):
-        raise InputError("generate_slope unit_weight", f"{unit_weight} is out of range",
-                         "give a unit weight >= 0")
+        raise InputError(
+            "generate_slope unit_weight",
+            f"{unit_weight} is out of range",
+            "give a unit weight >= 0",
+        )
+    if isinstance(joint_sets, JointSet):  # (found by fuzzing: a TypeError)
+        raise InputError(
+            "generate_slope joint_sets", "is one JointSet, not a list", "give [JointSet(...)]"
+        )
+    if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or seed < 0:
+        raise InputError(
+            "generate_slope seed", f"{seed!r} is not a whole number >= 0", "give 0, 1, 2, ..."
+        )
     sets = tuple(joint_sets)
     names = []
     for k, s in enumerate(sets):
@@ -158,18 +169,28 @@ def generate_slope(
     sides = tuple(boundary)
     for side in sides:
         if side not in BOUNDARY_SIDES:
-            raise InputError(f"generate_slope boundary {side!r}", "is not a side",
-                             f"use some of {BOUNDARY_SIDES}")
+            raise InputError(
+                f"generate_slope boundary {side!r}",
+                "is not a side",
+                f"use some of {BOUNDARY_SIDES}",
+            )
     if slivers not in ("merge", "report"):
-        raise InputError("generate_slope slivers", f"{slivers!r} is not an option",
-                         "use 'merge' or 'report'")
+        raise InputError(
+            "generate_slope slivers", f"{slivers!r} is not an option", "use 'merge' or 'report'"
+        )
     frac = float(min_block_fraction)
     if not (math.isfinite(frac) and 0 <= frac < 1):
-        raise InputError("generate_slope min_block_fraction", f"{frac} is out of range",
-                         "give a fraction in [0, 1)")
+        raise InputError(
+            "generate_slope min_block_fraction",
+            f"{frac} is out of range",
+            "give a fraction in [0, 1)",
+        )
     if not sets and ground_joint is None:
-        raise InputError("generate_slope", "no joint properties (no joint sets, no ground joint)",
-                         "give at least one JointSet or a ground_joint")
+        raise InputError(
+            "generate_slope",
+            "no joint properties (no joint sets, no ground joint)",
+            "give at least one JointSet or a ground_joint",
+        )
 
     section = section_polygon(profile, depth)
     check_size(estimate_size(section, sets), max_blocks, section)
@@ -223,10 +244,15 @@ def generate_slope(
     region = None
     if fixed_region is not None:
         region = _as_region(fixed_region, "generate_slope fixed_region")
-        if not shapely.intersects(region, section) or shapely.area(
-            shapely.intersection(region, section)) <= tol * extent:
-            raise InputError("generate_slope fixed_region", "does not overlap the section",
-                             f"give a region within x {xmin:g} to {xmax:g}, y {ymin:g} to {ymax:g}")
+        if (
+            not shapely.intersects(region, section)
+            or shapely.area(shapely.intersection(region, section)) <= tol * extent
+        ):
+            raise InputError(
+                "generate_slope fixed_region",
+                "does not overlap the section",
+                f"give a region within x {xmin:g} to {xmax:g}, y {ymin:g} to {ymax:g}",
+            )
         in_ground = shapely.covered_by(faces, shapely.buffer(region, 10 * tol, join_style="mitre"))
 
     # -------------------------------------------------------------- slivers
@@ -252,8 +278,10 @@ def generate_slope(
         else:
             area = shapely.area(faces)
             cent = shapely.get_coordinates(shapely.centroid(faces))
-            report = [(int(i), float(area[i]), tuple(cent[i]), False)
-                      for i in np.flatnonzero((area < small) & ~in_ground)]
+            report = [
+                (int(i), float(area[i]), tuple(cent[i]), False)
+                for i in np.flatnonzero((area < small) & ~in_ground)
+            ]
     if region is not None and in_ground.any():
         ground_polys, in_ground = _merge_ground(faces, in_ground)
     else:
@@ -285,8 +313,11 @@ def generate_slope(
     gface = np.flatnonzero(in_ground)
     sl = []
     for j, area, c, merged in report:
-        blk = int(fid[j]) if fid[j] >= 0 else (_ground_block(faces[j], ground_polys, n_free)
-                                               if gface.size else None)
+        blk = (
+            int(fid[j])
+            if fid[j] >= 0
+            else (_ground_block(faces[j], ground_polys, n_free) if gface.size else None)
+        )
         sl.append(Sliver(area, c, "merged" if merged else "kept", blk))
 
     # ---------------------------------------------------------- joint table
@@ -377,13 +408,13 @@ def _boundary_strips(section, profile, sides, thickness, free_xy, tol) -> list:
         return []
     xmin, ymin, xmax, ymax = section.bounds
     size = max(xmax - xmin, ymax - ymin)
-    t = 0.1 * size if thickness is None else _positive(
-        "generate_slope ground_thickness", thickness)
+    t = 0.1 * size if thickness is None else _positive("generate_slope ground_thickness", thickness)
     if t > MAX_GROUND * size:  # the tolerances follow the extent: the slope would vanish
-        raise InputError("generate_slope ground_thickness",
-                         f"{t:g} is more than {MAX_GROUND:g} x the section's size {size:.3g}",
-                         f"give at most {MAX_GROUND * size:.3g} (the ground only has to "
-                         "hold the blocks)")
+        raise InputError(
+            "generate_slope ground_thickness",
+            f"{t:g} is more than {MAX_GROUND:g} x the section's size {size:.3g}",
+            f"give at most {MAX_GROUND * size:.3g} (the ground only has to hold the blocks)",
+        )
     yb = ymin
     y_back, y_front = float(profile.points[0, 1]), float(profile.points[-1, 1])
     x, y = free_xy[:, 0], free_xy[:, 1]
@@ -432,11 +463,15 @@ def _as_region(region, where: str) -> shapely.Polygon:
         try:
             poly = shapely.Polygon(np.asarray(region, dtype=float))
         except (TypeError, ValueError) as exc:
-            raise InputError(where, "is not a polygon", "give a shapely Polygon or (x, y) "
-                             "vertices") from exc
+            raise InputError(
+                where, "is not a polygon", "give a shapely Polygon or (x, y) vertices"
+            ) from exc
     if poly.is_empty or not poly.is_valid or poly.area <= 0:
-        raise InputError(where, "is not a valid polygon (empty, zero area or self-crossing)",
-                         "list its vertices in order around it")
+        raise InputError(
+            where,
+            "is not a valid polygon (empty, zero area or self-crossing)",
+            "list its vertices in order around it",
+        )
     return poly
 
 
