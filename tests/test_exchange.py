@@ -187,6 +187,25 @@ def test_a_drawing_in_feet_is_read_in_the_length_the_units_name(tmp_path, note):
     assert loaded.blocks.area.sum() == pytest.approx(metres.blocks.area.sum(), rel=1e-12)
 
 
+def test_a_binary_drawing_is_read_as_its_text_twin(tmp_path):
+    """Found by fuzzing: binary DXF was refused ("Invalid group code"), though
+    the refusal of a DWG asks for DXF "ASCII or binary"; cut short, it is a
+    one-line refusal (it was "the analysis failed: error: unpack_from")."""
+    import ezdxf
+
+    text = draw(tmp_path)
+    binary = tmp_path / "binary.dxf"
+    ezdxf.readfile(text).saveas(binary, fmt="bin")
+    assert binary.read_bytes().startswith(b"AutoCAD Binary DXF")
+    a, b = cut_section(read_section(text)), cut_section(read_section(binary))
+    assert len(a.polygons) == len(b.polygons)
+    for pa, pb in zip(a.polygons, b.polygons, strict=True):
+        assert np.array_equal(pa, pb)
+    cut = tmp_path / "cut.dxf"
+    cut.write_bytes(binary.read_bytes()[:3000])
+    assert_refused(invoke("import", cut), "is not a readable DXF file")
+
+
 @pytest.mark.parametrize("code", [21, 8, 9])
 def test_a_drawing_unit_rockdem_cannot_convert_is_refused(tmp_path, code):
     """Found by fuzzing: $INSUNITS 21 (US survey feet), 8 or 9 stopped with

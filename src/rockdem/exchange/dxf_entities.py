@@ -9,6 +9,7 @@ import io
 import logging
 import math
 import re
+import struct
 from pathlib import Path
 
 import numpy as np
@@ -80,8 +81,20 @@ def _open(path: Path, source: str):
     ezdxf_log = logging.getLogger("ezdxf")
     was_disabled, ezdxf_log.disabled = ezdxf_log.disabled, True
     try:
-        doc, auditor = recover.read(io.BytesIO(raw))
-    except (ezdxf.DXFError, ValueError, IndexError, KeyError, TypeError, UnicodeError) as exc:
+        if binary:  # (recover reads text only; found by fuzzing: binary DXF was refused)
+            doc = ezdxf.readfile(str(path))
+            auditor = doc.audit()
+        else:
+            doc, auditor = recover.read(io.BytesIO(raw))
+    except (
+        ezdxf.DXFError,
+        ValueError,
+        IndexError,
+        KeyError,
+        TypeError,
+        UnicodeError,
+        struct.error,
+    ) as exc:
         text = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
         raise _fail(
             source,
