@@ -187,6 +187,18 @@ def test_a_drawing_in_feet_is_read_in_the_length_the_units_name(tmp_path, note):
     assert loaded.blocks.area.sum() == pytest.approx(metres.blocks.area.sum(), rel=1e-12)
 
 
+@pytest.mark.parametrize("name", ["1e3", "0o17", "true", "12"])
+def test_an_imported_name_that_looks_like_a_number_stays_a_name(tmp_path, name):
+    """Found by fuzzing: `--name 1e3` (or a layer JOINT_1e3) was written bare,
+    and the reader took it for 1000.0 ("write a name in quotes")."""
+    dxf = draw(tmp_path)
+    out = tmp_path / "m.yaml"
+    r = invoke("import", dxf, "--name", name, "-o", out)
+    assert r.exit_code == 0, r.stderr
+    _, cfg = load_model(out)
+    assert cfg.name == name
+
+
 def test_a_binary_drawing_is_read_as_its_text_twin(tmp_path):
     """Found by fuzzing: binary DXF was refused ("Invalid group code"), though
     the refusal of a DWG asks for DXF "ASCII or binary"; cut short, it is a

@@ -43,13 +43,21 @@ class _Loader(_LoaderBase):
     }
 
 
-_Loader.add_implicit_resolver(
-    _BOOL, re.compile(r"^(?:true|True|TRUE|false|False|FALSE)$"), list("tTfF")
-)
-_Loader.add_implicit_resolver(
-    _INT, re.compile(r"^[-+]?[0-9]+$|^0o[0-7]+$|^0x[0-9a-fA-F]+$"), list("-+0123456789")
-)
-_Loader.add_implicit_resolver(_FLOAT, _FLOAT_RE, list("-+0123456789."))
+def add_core_resolvers(cls) -> None:
+    """Teach a PyYAML loader or dumper class the YAML 1.2 core schema's numbers
+    and booleans: the reader resolves them, and a dumper given them quotes a
+    string that would read back as one (found by fuzzing: `rockdem import
+    --name 1e3` wrote `name: 1e3`, which its own reader took for 1000.0)."""
+    cls.add_implicit_resolver(
+        _BOOL, re.compile(r"^(?:true|True|TRUE|false|False|FALSE)$"), list("tTfF")
+    )
+    cls.add_implicit_resolver(
+        _INT, re.compile(r"^[-+]?[0-9]+$|^0o[0-7]+$|^0x[0-9a-fA-F]+$"), list("-+0123456789")
+    )
+    cls.add_implicit_resolver(_FLOAT, _FLOAT_RE, list("-+0123456789."))
+
+
+add_core_resolvers(_Loader)
 
 
 def _construct_int(loader: yaml.SafeLoader, node: yaml.ScalarNode) -> int:

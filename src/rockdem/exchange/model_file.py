@@ -35,8 +35,12 @@ class _FlowList(list):
 def _dumper():
     import yaml
 
+    from ..config.yaml_read import add_core_resolvers
+
     class Dumper(yaml.SafeDumper):
         pass
+
+    add_core_resolvers(Dumper)  # a name like 1e3 or 0o17 is written in quotes
 
     def flow_map(dumper, data):
         return dumper.represent_mapping("tag:yaml.org,2002:map", data.items(), flow_style=True)

@@ -52,7 +52,14 @@ def write_sample_model(path: Path, plan: Plan, sample: int, row) -> None:
         f"# replay: rockdem fos {path.name}",
         "",
     ]
-    text = "\n".join(head) + yaml.safe_dump(doc, sort_keys=False, allow_unicode=True)
+    from ..config.yaml_read import add_core_resolvers
+
+    class Dumper(yaml.SafeDumper):
+        pass
+
+    add_core_resolvers(Dumper)  # a joint named '1e3' stays a name when read back
+    body = yaml.dump(doc, Dumper=Dumper, sort_keys=False, allow_unicode=True)
+    text = "\n".join(head) + body
     _atomic_write(path, lambda tmp: tmp.write_text(text, encoding="utf-8"))
 
 
