@@ -539,6 +539,14 @@ BAD = [
         {"inputs": {PHI: {"distribution": "lognormal", "mean": -1, "sd": 2}}},
         ["lognormal: mean = -1 must be > 0"],
     ),
+    (  # scipy's overflow warnings before the error line; "inf is not finite" (fuzzing)
+        {"inputs": {PHI: {"distribution": "normal", "mean": 1e308, "sd": 1e308}}},
+        ["study.inputs.joints.plane.friction_angle", "a parameter of 1e+308 is beyond 1e+15"],
+    ),
+    (
+        {"inputs": {PHI: {"distribution": "uniform", "min": -1.7e308, "max": 1.7e308}}},
+        ["study.inputs.joints.plane.friction_angle", "a parameter of 1.7e+308 is beyond"],
+    ),
     (  # overflowed in the sampler: "the analysis failed: OverflowError" (fuzzing)
         {"inputs": {PHI: {"distribution": "lognormal", "mean": 1, "sd": 1e200}}},
         ["study.inputs.joints.plane.friction_angle", "sd / mean = 1e+200 is over 100"],
@@ -730,7 +738,8 @@ def test_when_no_sample_can_be_analysed_the_study_is_refused(tmp_path):
     """Fuzzing (F6): with sd 1e300 every sample was out of range, nothing was
     computed and the command exited 0.  It is refused in one line (why and the
     fix), and the folder is left as it was."""
-    spec = {"inputs": {PHI: {"distribution": "normal", "mean": 33, "sd": 1e300}}, "samples": 4}
+    # (sd 1e6: each sample lies in [0, 90) with probability 4e-5)
+    spec = {"inputs": {PHI: {"distribution": "normal", "mean": 33, "sd": 1e6}}, "samples": 4}
     model = write_model(tmp_path, spec)
     out = tmp_path / "out"
     out.mkdir()

@@ -24,6 +24,9 @@ MAX_SAMPLES = 1_000_000
 #: Most points along one sweep axis.
 MAX_SWEEP_STEPS = 1_000
 
+#: Largest parameter of a distribution or a sweep (every quantity of a model is
+#: within 1e15: stiffnesses, forces).
+MAX_PARAMETER = 1e15
 #: Largest coefficient of variation (sd / mean) of a lognormal input.
 MAX_LOGNORMAL_COV = 100.0
 #: ... and the smallest (below it the log-spread underflows to zero)
@@ -102,6 +105,14 @@ class InputSpec(_Section):
                     "truncated-normal: [min, max] lies more than 8 sd from the mean "
                     "(no probability inside)"
                 )
+        values = [abs(v) for v in (self.mean, self.sd, self.min, self.max, self.mode) if v]
+        if values and max(values) > MAX_PARAMETER:
+            # (found by fuzzing: mean and sd of 1e308 overflowed in the sampler,
+            # uniform +-1.7e308 read as "inf is not a finite number")
+            raise ValueError(
+                f"{d}: a parameter of {max(values):g} is beyond {MAX_PARAMETER:g}, the largest "
+                "value of any quantity of a model; give the distribution of the value itself"
+            )
         return self
 
 
@@ -134,6 +145,12 @@ class SweepSpec(_Section):
             raise ValueError("give either `values`, or `start`, `stop` and `steps`, not both")
         if self.values is None and len(ranged) != 3:
             raise ValueError("give `values: [...]`, or `start`, `stop` and `steps`")
+        values = [abs(v) for v in (*(self.values or ()), self.start, self.stop) if v]
+        if values and max(values) > MAX_PARAMETER:
+            raise ValueError(
+                f"a value of {max(values):g} is beyond {MAX_PARAMETER:g}, the largest value of "
+                "any quantity of a model"
+            )
         return self
 
     def points(self) -> list[float]:
