@@ -199,6 +199,24 @@ def test_an_imported_name_that_looks_like_a_number_stays_a_name(tmp_path, name):
     assert cfg.name == name
 
 
+def test_an_empty_joint_layer_left_in_the_drawing_is_ignored(tmp_path):
+    """Found by fuzzing: an empty leftover layer JOINT_old refused the
+    template ("no joint 'old' in joints"), and without a template an empty
+    JOINT_aaa became the joint of every ground contact."""
+    import ezdxf
+
+    dxf = draw(tmp_path)
+    doc = ezdxf.readfile(dxf)
+    doc.layers.add("JOINT_old")
+    doc.layers.add("JOINT_aaa")
+    doc.saveas(dxf)
+    (tmp_path / "model.yaml").write_text(MODEL)
+    model, _ = load_model(tmp_path / "model.yaml")
+    assert [j.name for j in model.joints] == ["bedding", "cross"]
+    section = read_section(dxf)
+    assert set(section.joint_layers) == {"JOINT_bedding", "JOINT_cross"}
+
+
 def test_a_binary_drawing_is_read_as_its_text_twin(tmp_path):
     """Found by fuzzing: binary DXF was refused ("Invalid group code"), though
     the refusal of a DWG asks for DXF "ASCII or binary"; cut short, it is a

@@ -198,8 +198,14 @@ def _resolve(
     names: dict[str, str],
     joints: Sequence[str] | None,
     source: str,
+    drawn: set[str] | None = None,
 ) -> tuple[dict[str, str | None], dict[str, str]]:
-    """(role -> layer name in the drawing, joint layer -> joint name)."""
+    """(role -> layer name in the drawing, joint layer -> joint name).
+
+    ``drawn``: the upper-case names of the layers that hold entities; a
+    ``JOINT_`` layer found by its name and holding none is left out (found by
+    fuzzing: an empty leftover layer JOINT_old made a template refused for
+    "no joint 'old'", and an empty JOINT_aaa named the ground's joint)."""
     given = dict(layers or {})
     unknown = set(given) - {*DEFAULT_LAYERS, "joints"}
     if unknown:
@@ -257,6 +263,8 @@ def _resolve(
         for upper, name in sorted(names.items()):
             prefix = next((p for p in JOINT_PREFIXES if upper.startswith(p)), None)
             if prefix is None or len(name) == len(prefix):
+                continue
+            if drawn is not None and upper not in drawn:
                 continue
             joint_layers[name] = _joint_of(name[len(prefix) :], joints, name, source)
     taken = {n.upper(): r for r, n in roles.items() if n is not None}
@@ -320,7 +328,8 @@ def read_section(
     source = str(path)
     doc = _open(path, source)
     names = _layer_names(doc)
-    roles, joint_layers = _resolve(layers, names, joints, source)
+    drawn = {e.dxf.get("layer", "0").upper() for e in doc.modelspace()}
+    roles, joint_layers = _resolve(layers, names, joints, source, drawn)
     insunits, scale = _scale(doc, length_unit, source)
     by_layer: dict[str, list] = {}
     skipped: dict[str, int] = {}
