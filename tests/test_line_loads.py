@@ -72,6 +72,14 @@ def test_a_line_load_inside_a_block_is_refused():
     block_loads(blocks, rd.Loads(gravity=False, lines=(joint,)))
 
 
+def test_a_line_load_pulling_away_from_the_surface_says_so():
+    """Found by fuzzing: an uplift on the crest (q = (0, +10)) was "does not
+    lie on block boundaries all along", though it lies on the crest."""
+    uplift = rd.LineLoad((0.0, H), (B, H), 0.0, 10.0, name="uplift")
+    with pytest.raises(rd.InputError, match=r"uplift: pulls away from the rock \(traction"):
+        block_loads(two_blocks(), rd.Loads(gravity=False, lines=(uplift,)))
+
+
 def test_a_line_load_on_the_fixed_ground_alone_is_refused():
     """Found by fuzzing: a line load on the ground's surface beside the
     blocks pushed only into the fixed block, where it carries nothing, and

@@ -122,6 +122,15 @@ def _split_line_loads(blocks: Blocks, loads: Loads):
         lengths = shapely.length(pieces)
         ok = lengths > blocks.tolerance
         if lengths.sum() < 0.999 * length:
+            back = shapely.LineString([p0 - shift, p1 - shift])
+            behind = shapely.length(shapely.intersection(polys, back)).sum()
+            if behind >= 0.999 * length:  # on the surface, pulling away (found by fuzzing)
+                raise InputError(
+                    name,
+                    f"pulls away from the rock (traction ({q[0]:g}, {q[1]:g}) points out of "
+                    "the block it lies on)",
+                    "give a traction that pushes into the rock (an uplift is not modelled)",
+                )
             raise InputError(
                 name, "does not lie on block boundaries all along", "move it onto the surface"
             )
