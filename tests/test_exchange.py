@@ -644,6 +644,21 @@ def test_bolts_are_passive_bolts_or_anchors_pulling_from_the_face(tmp_path):
     assert_refused(invoke("check", tmp_path / "model.yaml"), "both `bolt` and `bolt_force`")
 
 
+def test_a_bolt_drawn_through_to_the_back_edge_has_its_head_on_the_face(tmp_path):
+    """Found by fuzzing: a bolt line from the back edge (on the fixed ground)
+    to the face, both ends on the outline, took its head at the back: the
+    anchor acted on the fixed block ("supports[0]: ... acts on a fixed block")."""
+    head = (11.0, 7.5)  # on the face
+    back = (0.0, 7.5)  # on the back edge, in the fixed strip behind x = 1
+    dxf = draw(tmp_path, bolts=[(back, head)])
+    anchors = MODEL.replace("section.dxf}", "section.dxf, bolt_force: 80}")
+    (tmp_path / "model.yaml").write_text(anchors)
+    model, _ = load_model(tmp_path / "model.yaml")
+    (bolt,) = [p for p in model.loads.points if p.name == "drawn bolt 1"]
+    assert (bolt.x, bolt.y) == head and bolt.fx < 0  # pulling into the slope
+    assert invoke("import", dxf, "--bolt-force", "80").exit_code == 0
+
+
 # ------------------------------------------------------------------ results out
 @pytest.fixture(scope="module")
 def fos_results(tmp_path_factory):

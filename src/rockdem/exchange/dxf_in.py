@@ -428,6 +428,8 @@ def read_section(
         import shapely
 
         ring = shapely.LinearRing(outline)
+        ground = shapely.union_all([shapely.Polygon(f) for f in fixed])
+        touch = 1e-6 * float(np.ptp(outline, axis=0).max())
         for e in entities(roles["bolts"]):
             xy, _ = _entity_points(e, scale, source, roles["bolts"])
             if len(xy) != 2:
@@ -437,8 +439,14 @@ def read_section(
                     "draw each bolt as a LINE from its head on the face into the rock",
                     "layers.bolts",
                 )
-            d0, d1 = shapely.distance(shapely.points(xy), ring)
-            head, tail = (xy[0], xy[1]) if d0 <= d1 else (xy[1], xy[0])
+            # the head: the end on the face, not on the fixed ground, whichever
+            # way the line was drawn (found by fuzzing: one drawn from the back
+            # edge to the face put its head on the ground)
+            ends = shapely.points(xy)
+            on_ground = shapely.distance(ends, ground) <= touch
+            d0, d1 = shapely.distance(ends, ring)
+            first = d0 <= d1 if on_ground[0] == on_ground[1] else not on_ground[0]
+            head, tail = (xy[0], xy[1]) if first else (xy[1], xy[0])
             bolts.append(Bolt(head, tail))
     return Section(
         source=source,
