@@ -874,7 +874,9 @@ def test_control_characters_in_keys_names_and_text_are_refused(tmp_path, old, ne
     "option, value, fragment",
     [
         ("--dpi", "20000", "out of range 1 to 1200"),
-        ("--magnification", "inf", "positive and finite"),
+        ("--magnification", "inf", "out of range (0 < factor < 1e12)"),
+        # found by fuzzing: 1e12 was "must be positive and finite", which it is
+        ("--magnification", "1e12", "out of range (0 < factor < 1e12)"),
     ],
 )
 def test_plot_options_out_of_range_are_input_errors(tmp_path, option, value, fragment):

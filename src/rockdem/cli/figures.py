@@ -263,7 +263,7 @@ def _plot_options(
     if magnification is not None and not 0 < magnification < 1e12:
         raise InputError(
             f"--magnification {magnification:g}",
-            "must be positive and finite",
+            "is out of range (0 < factor < 1e12)",
             "give a factor such as 100",
         )
     if ids and what not in ("model", "failure"):

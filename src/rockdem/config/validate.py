@@ -248,7 +248,9 @@ def _describe(err: dict) -> tuple[Loc, str, str]:
         return loc, err["msg"], "write `format: 1` (or leave it out)"
     if kind in ("value_error", "assertion_error"):
         msg = err["msg"].removeprefix("Value error, ")
-        return loc, msg, "see `rockdem check --help` and docs/file-format.md"
+        section = str(loc[0]) if loc else ""
+        where = f"docs/file-format.md, `{section}`" if section else "docs/file-format.md"
+        return loc, msg, f"see {where}"
     return loc, err["msg"], "see docs/file-format.md"
 
 
