@@ -659,6 +659,33 @@ def test_a_bolt_drawn_through_to_the_back_edge_has_its_head_on_the_face(tmp_path
     assert invoke("import", dxf, "--bolt-force", "80").exit_code == 0
 
 
+def test_a_bolt_drawn_twice_is_refused(tmp_path):
+    """Found by fuzzing: a bolt copied onto itself in CAD doubled the bolting
+    without a word."""
+    head = (11.0, 7.5)
+    tail = (head[0] - 6.0, head[1] - 1.6)
+    dxf = draw(tmp_path, bolts=[(tail, head), (head, tail)])
+    assert_refused(invoke("import", dxf, "--bolt-force", "80"), "lies on bolt 1 (a copy?)")
+
+
+def test_the_imported_file_says_which_joint_the_ground_takes_and_drops_template_trials(
+    tmp_path,
+):
+    """Found by fuzzing: without a template the first joint took every
+    contact with the fixed ground, unsaid; with one, its stabilisation trials
+    (the template's own block ids) were carried into the new model."""
+    dxf = draw(tmp_path)
+    r = invoke("import", dxf)
+    assert "# contacts with the fixed ground and untraced contacts take joint 'bedding'" in (
+        r.stdout
+    )
+    template = MODEL + "stabilisation:\n  target_fos: 1.5\n  trials: [{remove: [3, 4]}]\n"
+    (tmp_path / "t.yaml").write_text(template.replace("geometry: {dxf: section.dxf}\n", ""))
+    text, _, _ = model_text(dxf, template=tmp_path / "t.yaml")
+    _, cfg = parse_model(text)
+    assert cfg.stabilisation.target_fos == 1.5 and cfg.stabilisation.trials == []
+
+
 # ------------------------------------------------------------------ results out
 @pytest.fixture(scope="module")
 def fos_results(tmp_path_factory):

@@ -60,9 +60,7 @@ def _in_template(exc, template: Path | None, drawing: Path):
     at_drawing = ModelFileError(str(drawing), exc.key, exc.problem, exc.fix, None)
     if template is None or not exc.key:
         return at_drawing
-    loc = tuple(
-        int(part) if part.isdigit() else part for part in re.findall(r"[^.\[\]]+", exc.key)
-    )
+    loc = tuple(int(part) if part.isdigit() else part for part in re.findall(r"[^.\[\]]+", exc.key))
     data, nodes = read_document(template)
     node = data
     for part in loc:  # the whole key path must be the template's
@@ -94,8 +92,9 @@ def import_dxf(
         typer.Option(
             "--template",
             "-t",
-            help="Take units, materials, joints, loads and analysis settings from this "
-            "model file (otherwise the joints get placeholder properties to edit).",
+            help="Take units, materials, joints, loads, supports, bolts, analysis and "
+            "stabilisation settings (not its trials or stages, which name its own blocks) "
+            "from this model file (otherwise the joints get placeholder properties to edit).",
             metavar="MODEL",
         ),
     ] = None,

@@ -447,6 +447,21 @@ def read_section(
             d0, d1 = shapely.distance(ends, ring)
             first = d0 <= d1 if on_ground[0] == on_ground[1] else not on_ground[0]
             head, tail = (xy[0], xy[1]) if first else (xy[1], xy[0])
+            twin = next(
+                (
+                    k
+                    for k, b in enumerate(bolts)
+                    if np.abs(b.head - head).max() <= touch and np.abs(b.tail - tail).max() <= touch
+                ),
+                None,
+            )
+            if twin is not None:  # (found by fuzzing: a copy doubled the bolting silently)
+                raise _fail(
+                    source,
+                    f"layer {roles['bolts']}: {_describe(e)} lies on bolt {twin + 1} (a copy?)",
+                    "draw each bolt once (delete the copy; OVERKILL in AutoCAD)",
+                    "layers.bolts",
+                )
             bolts.append(Bolt(head, tail))
     return Section(
         source=source,

@@ -78,6 +78,13 @@ def model_document(
     base = dict(template or {})
     for key in ("blocks", "slope", "geometry", "remove"):
         base.pop(key, None)
+    if isinstance(base.get("stabilisation"), Mapping):
+        # trials and stages name the template's blocks, which are not these
+        # (found by fuzzing: they were carried into the imported model)
+        stabilisation = dict(base["stabilisation"])
+        for key in ("trials", "stages"):
+            stabilisation.pop(key, None)
+        base["stabilisation"] = stabilisation
     doc: dict[str, Any] = {}
     doc["name"] = base.pop("name", None) or name or Path(section.source).stem
     doc["description"] = base.pop(
@@ -211,6 +218,13 @@ def model_text(
         head.append(
             "# EDIT the joint properties and the unit weight: they are placeholders "
             "(phi 35, c 0, kn 1e6; 26 kN/m^3)"
+        )
+    if "ground_joint" not in doc and "default_joint" not in doc:
+        # (found by fuzzing: which joint the ground contacts took was not said)
+        first = next(iter(doc["joints"]))
+        head.append(
+            f"# contacts with the fixed ground and untraced contacts take joint {first!r} "
+            "(the first); set ground_joint: or default_joint: to choose"
         )
     body = yaml.dump(
         doc,
