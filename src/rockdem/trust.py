@@ -4,6 +4,8 @@ model's limits), in plain sentences for the report and the command line."""
 
 from __future__ import annotations
 
+import numpy as np
+
 from .results import Analysis, FactorOfSafety
 
 PROOF_TEXT = {
@@ -75,7 +77,10 @@ def trust_statements(a: Analysis, fos: FactorOfSafety | None = None) -> list[str
                 "for the limit (on a 2,322-block test slope it was 0.6% below the exact one)."
             )
     elif fos is not None:
-        out.append(f"No factor of safety ({fos.mode}); bracket {fos.bracket}.")
+        lo, hi = fos.bracket
+        top = "no failure found" if not np.isfinite(hi) else f"failing at F = {hi:.4g}"
+        bottom = f"stable at F = {lo:.4g}" if lo > 0 else "stable at no factor tried"
+        out.append(f"No factor of safety ({fos.mode}): {bottom}, {top}.")
     if failed is not None:
         ev = failed.evidence
         proof = ev.proof or "undecided"
