@@ -200,7 +200,8 @@ MIN_SPACING = 1e-2
 
 #: largest ratio of a bolt's stiffness per unit width (axial or shear, over
 #: its spacing) to the normal stiffness of the interface it crosses (the
-#: joint's normal stiffness x the interface's length).  Real bolts are softer
+#: joint's normal stiffness x the interface's length, or the blocks' mean
+#: size where that is longer).  Real bolts are softer
 #: than the joints they cross (a 25 mm bar 1 m long, ~1e5 kN/m, against
 #: 1e6 kPa/m over 1 m).  Far stiffer ones make the equations ill-conditioned
 #: and the verdicts wrong: a bolted block on a plane (closed form 1.7833)
@@ -210,13 +211,18 @@ MIN_SPACING = 1e-2
 BOLT_STIFFNESS_CONTRAST_MAX = 1e4
 
 
-def check_bolt_stiffness(bolts, crossings, faces, joints) -> None:
+def check_bolt_stiffness(bolts, crossings, faces, joints, length_scale: float) -> None:
     """An InputError for a bolt far stiffer than the interface it crosses
-    (see BOLT_STIFFNESS_CONTRAST_MAX), naming the bolt and its key."""
+    (see BOLT_STIFFNESS_CONTRAST_MAX), naming the bolt and its key.
+
+    The interface counts at least the blocks' mean size (``length_scale``):
+    a bolt through the tip of a sliver interface is held by the blocks'
+    contacts, not by that sliver alone."""
     if crossings is None:
         return
     kn = np.array([j.normal_stiffness for j in joints], dtype=float)[faces.joint]
-    iface_k = kn[crossings.interface] * faces.length[crossings.interface]
+    length = np.maximum(faces.length[crossings.interface], length_scale)
+    iface_k = kn[crossings.interface] * length
     for key, k in (("axial_stiffness", crossings.k_axial), ("shear_stiffness", crossings.k_shear)):
         ratio = k / iface_k
         worst = int(np.argmax(ratio))
@@ -230,7 +236,8 @@ def check_bolt_stiffness(bolts, crossings, faces, joints) -> None:
             f"{where} {key}",
             f"{getattr(bolt, key):g} makes the bolt {ratio[worst]:.3g} times as stiff as the "
             f"joint it crosses at ({crossings.point[worst][0]:.4g}, "
-            f"{crossings.point[worst][1]:.4g}) (normal stiffness x length, per unit width): "
+            f"{crossings.point[worst][1]:.4g}) (normal stiffness x length, at least the blocks' "
+            "mean size, per unit width): "
             f"beyond {BOLT_STIFFNESS_CONTRAST_MAX:g} times the equations are ill-conditioned "
             "and the verdicts are not reliable",
             f"give {key}: {limit:.3g} or less (a bolt's E A / L; its capacity, not its "

@@ -127,7 +127,7 @@ def build_system(model: Model, f_block: np.ndarray | None = None) -> System:
     n = springs.n_springs
     K0 = asm.stiffness(springs.kn, np.zeros(n), springs.ks)
     bolts = place_bolts(model.bolts, blocks, faces, asm)
-    check_bolt_stiffness(model.bolts, bolts, faces, model.joints)
+    check_bolt_stiffness(model.bolts, bolts, faces, model.joints, asm.length_scale)
     if bolts is not None:
         K0.data += bolts.stiffness_data(np.column_stack([bolts.k_axial, bolts.k_shear]))
     if f_block is None:
