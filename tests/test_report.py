@@ -147,6 +147,13 @@ def test_a_warning_issued_about_the_model_is_in_the_report(tmp_path):
         path = write_report(soft, tmp_path / "api", compute_fos=False, animation=False)
     boxes = re.findall(r'<div class="warning">Warning: ([^<]*)</div>', path.read_text())
     assert len(boxes) == 1 and "the verdict does not hold" in boxes[0], boxes
+    # the report carries it even where the caller's filters hide it
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        again = write_report(soft, tmp_path / "quiet", compute_fos=False, animation=False)
+    assert re.findall(r'<div class="warning">Warning: ([^<]*)</div>', again.read_text()) == boxes
     r = CliRunner().invoke(app, ["report", str(soft), "-o", str(tmp_path / "cli"), "-q"])
     assert r.exit_code == 0, r.output
     text = (tmp_path / "cli" / "report.html").read_text()

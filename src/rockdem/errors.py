@@ -25,19 +25,21 @@ class ModelWarning(UserWarning):
 
 @contextmanager
 def collecting_model_warnings() -> Iterator[list[str]]:
-    """The texts of the ModelWarnings shown inside the block, in a list (for
-    a report that must carry them); they are still shown as before."""
+    """The texts of the ModelWarnings issued inside the block, in a list (for
+    a report that must carry them), whatever the filters say about showing
+    them; every warning is then issued again outside, for the filters and
+    the display the caller has."""
     seen: list[str] = []
-    with warnings.catch_warnings():  # restores showwarning on exit
-        shown = warnings.showwarning
-
-        def show(message, category, *args, **kwargs):
-            if issubclass(category, ModelWarning):
-                seen.append(" ".join(str(message).split()))
-            shown(message, category, *args, **kwargs)
-
-        warnings.showwarning = show
-        yield seen
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", ModelWarning)
+        try:
+            yield seen
+        finally:
+            records = list(caught)
+    for w in records:
+        if issubclass(w.category, ModelWarning):
+            seen.append(" ".join(str(w.message).split()))
+        warnings.warn_explicit(w.message, w.category, w.filename, w.lineno, source=w.source)
 
 
 class InputError(RockdemError, ValueError):
