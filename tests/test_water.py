@@ -229,3 +229,40 @@ def test_water_heavier_than_the_rock_is_refused():
         rd.build_system(tonnes)
     assert "2.6" in str(err.value) and "1 t/m^3" in err.value.fix
     assert rd.build_system(model).interfaces.n_interfaces > 0
+
+
+# Sau Mau Ping Road, Hong Kong: E. Hoek, Practical Rock Engineering (2007),
+# ch. 7 "A slope stability problem in Hong Kong" (the data of Hoek & Bray
+# 1981's plane failure chapter): a 60 m slope, face 50 degrees, sheet joint
+# 35 degrees, a vertical tension crack 14 m deep 15.35 m behind the crest,
+# rock 2.6 t/m^3, water 1 t/m^3, c = 10 t/m^2, phi = 35; dry or with the crack
+# full, without an earthquake or with kh = 0.08.  Checked against the Hoek &
+# Bray closed form with the same data (as evaluated in the book's method).
+SMP_H, SMP_FACE, SMP_PLANE, SMP_Z, SMP_C, SMP_PHI = 60.0, 50.0, 35.0, 14.0, 10.0, 35.0
+
+
+@pytest.mark.parametrize(("z_w", "kh"), [(0.0, 0.0), (SMP_Z, 0.0), (0.0, 0.08), (SMP_Z, 0.08)])
+def test_sau_mau_ping_slope_is_hoek_and_bray(z_w, kh):
+    t = np.tan(np.radians(SMP_PLANE))
+    crest = -SMP_H / np.tan(np.radians(SMP_FACE))
+    foot = ((SMP_H - SMP_Z) / -t, SMP_H - SMP_Z)  # the crack's foot on the plane
+    block = [(0.0, 0.0), foot, (foot[0], SMP_H), (crest, SMP_H)]
+    out = (-SMP_H / t, SMP_H)  # where the plane meets the upper surface
+    behind = [foot, (foot[0], SMP_H), out]
+    ground = [(40.0, 0.0), (0.0, 0.0), out, (-150.0, SMP_H), (-150.0, -40.0), (40.0, -40.0)]
+    blocks = rd.Blocks.from_polygons(
+        [ground, behind, block], fixed=[True, True, False], unit_weight=2.6
+    )
+    table = ((foot[0], foot[1] + z_w), (0.0, 0.0)) if z_w else ()
+    loads = rd.Loads(water_table=table, water_unit_weight=1.0, seismic_h=kh)
+    joint = rd.Joint(normal_stiffness=1e5, friction_angle=SMP_PHI, cohesion=SMP_C).ductile
+    fos = rd.factor_of_safety(rd.Model(blocks, joint, loads=loads), width=0.002)
+    psi = np.radians(SMP_PLANE)
+    A = (SMP_H - SMP_Z) / np.sin(psi)
+    W = float(blocks.weight[2])
+    U, V = 0.5 * z_w * A, 0.5 * z_w**2
+    normal = W * (np.cos(psi) - kh * np.sin(psi)) - U - V * np.sin(psi)
+    exact = (SMP_C * A + normal * np.tan(np.radians(SMP_PHI))) / (
+        W * (np.sin(psi) + kh * np.cos(psi)) + V * np.cos(psi)
+    )
+    assert fos.value == pytest.approx(exact, rel=0.005)
