@@ -80,6 +80,14 @@ def test_a_line_load_pulling_away_from_the_surface_says_so():
         block_loads(two_blocks(), rd.Loads(gravity=False, lines=(uplift,)))
 
 
+def test_a_trapezoid_turning_from_push_to_pull_is_refused_as_such():
+    """Found by fuzzing: q from (0, -10) to (0, 5) was refused as a Gauss
+    point 'at (-8.64391, 10)' that 'does not act on any block'."""
+    turning = rd.LineLoad((0.0, H), (B, H), 0.0, -10.0, name="turning", q_end=(0.0, 5.0))
+    with pytest.raises(rd.InputError, match="turning: has a traction that turns from pushing"):
+        block_loads(two_blocks(), rd.Loads(gravity=False, lines=(turning,)))
+
+
 def test_a_line_load_on_the_fixed_ground_alone_is_refused():
     """Found by fuzzing: a line load on the ground's surface beside the
     blocks pushed only into the fixed block, where it carries nothing, and

@@ -115,6 +115,14 @@ def _split_line_loads(blocks: Blocks, loads: Loads):
         if length <= blocks.tolerance:
             raise InputError(name, "has zero length", "give two different end points")
         unit = q / max(np.hypot(*q), 1e-300)
+        ends = line.traction(np.array([0.0, 1.0]))
+        if np.any(ends @ unit < 0):  # (found by fuzzing: named a Gauss point, "acts on no block")
+            raise InputError(
+                name,
+                "has a traction that turns from pushing to pulling along it "
+                f"(({ends[0][0]:g}, {ends[0][1]:g}) to ({ends[1][0]:g}, {ends[1][1]:g}))",
+                "split it where the traction changes sign and leave out the part that pulls",
+            )
         shift = 10 * blocks.tolerance * unit
         seg = shapely.LineString([p0 + shift, p1 + shift])
         hit = tree.query(seg, predicate="intersects")
