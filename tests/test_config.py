@@ -454,3 +454,41 @@ def test_slope_geometry_error_is_keyed():
 def test_remove_profile_is_for_slopes_only():
     with pytest.raises(ModelFileError, match=r"remove\.profile: is for generated slopes"):
         parse_model(BOX + "remove: {profile: [[0, 0], [1, 0]]}\n")
+
+
+@pytest.mark.parametrize(
+    ("change", "fragment"),
+    [
+        ("loads: {water_unit_weight: 9.81", "loads.water_unit_weight 1 is not the unit weight"),
+        ("unit_weight: 25", "a rock unit weight of 2.5 is not 1 to 5 times"),
+    ],
+)
+def test_unit_weights_that_do_not_fit_the_units_are_warned(tmp_path, change, fragment):
+    """Found by fuzzing: water 1.0 (the t/m^3 value) in a kN model read FS
+    1.3933 instead of 1.1072, and rock 2.5 in a kN model 1.42 instead of 1.196,
+    without a word, though `units` names the system."""
+    import warnings
+
+    from rockdem.config import load_model
+    from rockdem.errors import ModelWarning
+
+    text = (
+        "units: kN, m, kPa\n"
+        "materials: {rock: {unit_weight: 25}}\n"
+        "joints:\n  j: {normal_stiffness: 1.0e+6, friction_angle: 30}\n"
+        "blocks:\n"
+        "  - {fixed: true, vertices: [[-5, -1], [5, -1], [5, 0], [-5, 0]]}\n"
+        "  - {material: rock, vertices: [[0, 0], [2, 0], [2, 1], [0, 1]]}\n"
+        "loads: {water_unit_weight: 9.81, water_table: [[-5, -0.5], [5, -0.5]]}\n"
+    )
+    path = tmp_path / "m.yaml"
+    path.write_text(text)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", ModelWarning)
+        load_model(path)  # consistent: no warning
+    bad = text.replace("water_unit_weight: 9.81", "water_unit_weight: 1.0")
+    if "rock" in fragment:  # (no water: 9.81 beside rock 2.5 is refused outright)
+        bad = text.replace("unit_weight: 25", "unit_weight: 2.5").split("loads:")[0]
+    path.write_text(bad)
+    with pytest.warns(ModelWarning, match=fragment):
+        load_model(path)

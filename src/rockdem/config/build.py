@@ -13,7 +13,7 @@ import numpy as np
 from ..errors import InputError
 from ..geometry.size import MAX_BLOCKS, memory_for
 from ..interfaces import check_held
-from .diagnose import _from_engine, _warn_loose_tolerance, _warn_unused_lines
+from .diagnose import _from_engine, _warn_loose_tolerance, _warn_unit_weights, _warn_unused_lines
 from .errors import Loc, ModelFileError, _keypath, _line
 from .sections import ProfileSpec
 from .spec import ModelFile
@@ -191,6 +191,7 @@ def build_model(
             check_held(model.blocks)  # a singular stiffness: say which blocks nothing holds
             raise
         _warn_unused_lines(system, cfg, own_lines, source, nodes)
+        _warn_unit_weights(model, cfg, source, nodes)
     except ModelFileError:
         raise
     except InputError as exc:
