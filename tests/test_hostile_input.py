@@ -992,6 +992,27 @@ def test_a_joint_line_along_no_contact_is_warned_about(tmp_path, offset):
         assert "STABLE" in r.stdout
 
 
+def test_a_joint_line_over_part_of_a_contact_is_warned_about(tmp_path):
+    """Found by fuzzing: a weak joint drawn over half of a 4 m contact gave
+    it to none (an interface takes a line's joint only along most of its
+    length), FS 2.000 for 0.728, silently."""
+    text = (
+        "units: kN, m, kPa\n"
+        "joints:\n  strong: {normal_stiffness: 1.0e+6, friction_angle: 45}\n"
+        "  weak: {normal_stiffness: 1.0e+6, friction_angle: 20}\n"
+        "default_joint: strong\n"
+        "joint_lines:\n  - {joint: weak, start: [0, 2], end: [2, 2]}\n"
+        "blocks:\n"
+        "  - {fixed: true, vertices: [[-5, -1], [9, -1], [9, 0], [-5, 0]]}\n"
+        "  - {unit_weight: 25, vertices: [[0, 0], [4, 0], [4, 2], [0, 2]]}\n"
+        "  - {unit_weight: 25, vertices: [[0, 2], [4, 2], [4, 4], [0, 4]]}\n"
+    )
+    (tmp_path / "m.yaml").write_text(text, encoding="utf-8")
+    r = inproc("check", "m.yaml", cwd=tmp_path)
+    assert r.returncode == 0
+    assert "warning: m.yaml:7: joint_lines[0] (joint weak) lies along no contact" in r.stderr
+
+
 def test_traces_far_from_every_contact_are_not_warned_about(tmp_path):
     """The bundled section's traces run on through the fixed ground, where
     they give no joint to any contact (18 of the 44 segments; a DXF round
