@@ -240,3 +240,18 @@ def test_bad_arguments_to_the_api_are_refused(call, where):
         call()
     assert str(err.value).startswith(where)
     assert err.value.fix
+
+
+def test_a_model_in_kn_and_mm_is_analysed_as_in_kn_and_m():
+    """Found by fuzzing: a unit weight of 2.5e-8 kN/mm^3 (rock in kN and mm)
+    was refused below 1e-6 on explicit blocks, so such a model could not be
+    entered; it gives the factor of safety of the same block in kN and m
+    (Hoek & Bray 1981 ch. 7: tan phi / tan psi)."""
+    from rockdem.verification import block_on_plane
+
+    metres = block_on_plane(35.0, rd.Joint(1e6, 30.0), width=2.0, height=1.0, unit_weight=25.0)
+    mm = block_on_plane(35.0, rd.Joint(1e-3, 30.0), width=2000.0, height=1000.0, unit_weight=2.5e-8)
+    a, b = rd.factor_of_safety(metres), rd.factor_of_safety(mm)
+    exact = np.tan(np.radians(30.0)) / np.tan(np.radians(35.0))
+    assert a.value == pytest.approx(exact, rel=0.005)
+    assert b.value == pytest.approx(a.value, rel=1e-6)

@@ -21,8 +21,9 @@ GEOMETRY_RTOL = 1e-8
 #: Largest unit weight (beyond it forces overflow in the squares of the solver).
 MAX_UNIT_WEIGHT = 1e9
 #: smallest non-zero unit weight (1e-200 underflowed: "no failure" where 1e-150
-#: gave the factor of safety; rock is 0.026 MN/m^3, 165 lbf/ft^3, 26,000 N/m^3)
-MIN_UNIT_WEIGHT = 1e-6
+#: gave the factor of safety; rock is 0.026 MN/m^3, 165 lbf/ft^3, 26,000 N/m^3,
+#: 2.6e-8 kN/mm^3 and 2.6e-11 MN/mm^3: 1e-6 refused kN and mm, found by fuzzing)
+MIN_UNIT_WEIGHT = 1e-12
 #: A block farther than this many typical block sizes from the others makes every
 #: block degenerate under the model-relative tolerance: it is refused by name.
 MAX_SPREAD = 1e7
