@@ -566,3 +566,17 @@ def _box(tmp_path) -> Path:
     path = tmp_path / "box.yaml"
     path.write_text(BOX)
     return path
+
+
+def test_a_reader_that_goes_away_ends_the_command_quietly_with_141():
+    """Found by fuzzing: `rockdem fos ... --out X | head -1` exited 1, the code
+    of a failed computation, though the results were written (rich exits 1
+    on a broken pipe).  141 is the shell's code for it; nothing on stderr."""
+    code = "from rockdem.cli.common import out\nfor _ in range(20000): out.print('x' * 40)\n"
+    with subprocess.Popen(
+        [sys.executable, "-c", code], stdout=subprocess.PIPE, stderr=subprocess.PIPE
+    ) as p:
+        assert p.stdout.readline() == b"x" * 40 + b"\n"
+        p.stdout.close()
+        assert p.wait(timeout=60) == 141
+        assert p.stderr.read() == b""

@@ -24,6 +24,9 @@ Exit codes
     already (without ``--overwrite``), an unknown figure or file type.  One
     line on stderr names the file, the key path and the fix; ``--debug``
     shows the traceback instead.
+141
+    The reader of the output went away (``rockdem ... | head -1``); files
+    the command writes are complete.
 """
 
 from __future__ import annotations

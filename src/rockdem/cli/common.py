@@ -65,7 +65,24 @@ example_app = typer.Typer(
 )
 app.add_typer(example_app, name="example")
 
-out = Console(highlight=False, soft_wrap=True)
+#: exit code when the reader of stdout went away (``rockdem ... | head -1``):
+#: the shell's for SIGPIPE, not 1, which says the computation failed
+EXIT_PIPE = 141
+
+
+class _Console(Console):
+    def on_broken_pipe(self) -> None:
+        """Stop quietly with EXIT_PIPE (rich exits 1; found by fuzzing)."""
+        import os
+        import sys
+
+        self.quiet = True
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())  # (the interpreter flushes stdout at exit)
+        raise SystemExit(EXIT_PIPE)
+
+
+out = _Console(highlight=False, soft_wrap=True)
 err = Console(stderr=True, highlight=False, soft_wrap=True)
 
 
