@@ -13,6 +13,10 @@ def main() -> None:
 
         sys.stdout.write(f"rockdem {__version__}\n")
         return
-    from .cli import main as cli_main
+    try:
+        from .cli import main as cli_main
 
-    cli_main()
+        cli_main()
+    except KeyboardInterrupt:  # Ctrl-C while the libraries load (found by fuzzing:
+        sys.stderr.write("interrupted\n")  # a 29-68 line traceback)
+        sys.exit(130)
