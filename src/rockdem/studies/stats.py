@@ -381,10 +381,10 @@ def worst_samples(ok, compute: str, k: int) -> list[int]:
     if k <= 0 or not len(ok):
         return []
     if compute == "fos":
-        fs = ok["fs"].astype(float)
         # no value: a strength-independent mechanism is worse than any factor
-        key = fs.where(fs.notna(), np.where(ok["mode"] == "strength-independent", -1.0, np.inf))
-        order = key.sort_values(kind="stable").index
+        key = ranked_factors(ok)
+        key[np.isnan(key)] = np.inf
+        order = ok.index[np.argsort(key, kind="stable")]
     else:
         failed = ok[ok["failed"].fillna(False).astype(bool)]
         order = (
