@@ -5,10 +5,11 @@ exists, so "Newton found none" is not a verdict.  Dynamic relaxation solves
 the same equations ``r(q) = lambda f - B^T F(q) = 0`` another way, as the
 explicit dynamics of the blocks, the scheme of UDEC and PFC (Cundall 1987):
 
-* each degree of freedom gets the fictitious mass ``M_ii = sum_j |K0_ij|``
-  (Gershgorin: every frequency of ``M^-1 K`` is then at most 1, and a unit
-  time step is stable for any tangent, since sliding and opening springs
-  only soften);
+* each degree of freedom gets the fictitious mass ``M_ii = sum_j |K0_ij|
+  d_j / d_i``, the row sum in unknowns of one kind (translations, and
+  rotations times the block's size: :func:`_mass`) (Gershgorin: every
+  frequency of ``M^-1 K`` is then at most 1, and a unit time step is
+  stable for any tangent, since sliding and opening springs only soften);
 * local non-viscous damping: the force driving each degree of freedom is
   reduced by ``DAMPING x |r_i|`` against its velocity (Cundall's local
   damping, 0.8 as in UDEC), so the blocks settle without a damping constant
@@ -153,7 +154,7 @@ def relax(
 
     unbalanced = _Unbalanced(system, state.slip, strengths, f)
 
-    mass = np.asarray(abs(system.K0).sum(axis=1)).ravel()
+    mass = _mass(system)
     elastic = system.elastic_scale * max(load_factor, 1e-12)
     budget = step_budget(asm.n_dof, max_steps) if extend else max_steps
     v = np.zeros_like(q)
@@ -226,6 +227,23 @@ def relax(
         # settling, or moving where the budget allows a second look: one more segment
         seg_start, late_start, late_low, peaks = step, None, np.inf, [0.0]
     return Relaxation("undecided", q, step, float(ratio), 0.0)
+
+
+def _mass(system) -> np.ndarray:
+    """Gershgorin mass ``M_ii = sum_j |K0_ij| d_j / d_i``, with ``d`` 1 for
+    a translation and 1 / (block size) for a rotation: the row sums of
+    ``|K0|`` in unknowns of one kind (translation, rotation x the block's
+    size), so the motion is the same in any unit system (the raw row sum
+    adds force/length to force/radian).  Any positive ``d`` keeps every
+    frequency of ``M^-1 K`` at most 1; the block's own size keeps each
+    block's rotation as stiff, relative to its translation, as a rigid
+    block's radius of gyration makes it."""
+    asm = system.assembly
+    blocks = system.blocks
+    free = asm.dof[:, 2] >= 0
+    d = np.ones(asm.n_dof)
+    d[asm.dof[free, 2]] = 1.0 / np.sqrt(np.abs(blocks.area[free]))
+    return (abs(system.K0) @ d) / d
 
 
 class _Unbalanced:

@@ -389,6 +389,11 @@ def _print_fos(doc: dict[str, Any]) -> None:
                 f"above it: equilibrium was lost at {hi:.4f}, but no failure was proven or "
                 "confirmed there)"
             )
+        elif doc["factor_of_safety"] == lo < hi:  # a bracket the search could not narrow
+            out.print(
+                f"factor of safety: [bold]{lo:.4f}[/bold] (the largest factor found stable; the "
+                "bracket stays wide: failure is confirmed only at its top)"
+            )
         else:
             out.print(f"factor of safety: [bold]{doc['factor_of_safety']:.4f}[/bold]")
         d = bracket_decimals(lo, hi)
