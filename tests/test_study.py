@@ -817,3 +817,12 @@ def test_a_scheduler_address_where_something_else_answers_is_one_clear_line(tmp_
     line = assert_refused(r, f"--scheduler {address}", "is not a dask scheduler", "tcp://host:8786")
     assert "MemoryError" not in line and "EiB" not in line
     assert not (tmp_path / "out").exists()
+
+
+def test_a_correlation_of_one_input_asks_for_both(tmp_path):
+    """`inputs: [a]` under a correlation said "inputs[1]: required key is
+    missing; add `1:`", as if 1 were a key to write."""
+    spec = {**normal_phi(samples=2), "correlations": [{"inputs": [PHI], "rho": 0.5}]}
+    r = invoke("check", write_model(tmp_path, spec))
+    assert_refused(r, "study.correlations[0].inputs:", "expected 2 items, got 1", "write both")
+    assert "add `1:`" not in r.output

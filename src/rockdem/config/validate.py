@@ -199,6 +199,14 @@ def _describe(err: dict) -> tuple[Loc, str, str]:
     if kind == "missing" and loc and isinstance(loc[-1], int) and _is_point(loc[:-1]):
         # a point with a coordinate missing (`origin: []`, a vertex `[x]`)
         return loc[:-1], "expected a point [x, y] with two numbers", "write [x, y]"
+    if kind == "missing" and loc and isinstance(loc[-1], int):
+        # an item of a fixed-length list (`inputs: [a]` for two inputs)
+        tp = _type_at(loc[:-1])
+        args = typing.get_args(tp) if typing.get_origin(tp) is tuple else ()
+        count = len(args) if args and Ellipsis not in args else loc[-1] + 1
+        got = len(value) if isinstance(value, list | tuple) else loc[-1]
+        fix = "write both: [a, b]" if count == 2 else f"write all {count}: [a, b, ...]"
+        return loc[:-1], f"expected {count} items, got {got}", fix
     if kind == "missing":
         doc = _field_doc(loc)
         fix = f"add `{loc[-1]}:`" + (f" ({doc})" if doc else "")
