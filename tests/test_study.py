@@ -826,3 +826,15 @@ def test_a_correlation_of_one_input_asks_for_both(tmp_path):
     r = invoke("check", write_model(tmp_path, spec))
     assert_refused(r, "study.correlations[0].inputs:", "expected 2 items, got 1", "write both")
     assert "add `1:`" not in r.output
+
+
+def test_an_empty_study_file_is_blamed_not_the_model(tmp_path):
+    """A `--spec` file holding `study: null` (or `study:` alone) was reported
+    as "the model file has no `study:` section", naming the model."""
+    model = write_model(tmp_path, None)
+    spec = tmp_path / "s.yaml"
+    spec.write_text("study:\n")
+    r = invoke("study", model, "--spec", spec, "--out", tmp_path / "o")
+    assert_refused(r, "s.yaml", "study: the section is empty")
+    assert "plane.yaml" not in r.output
+    assert not (tmp_path / "o").exists()

@@ -115,6 +115,13 @@ def prepare(model, spec=None, *, max_blocks: int | None = MAX_BLOCKS) -> Plan:
             study_data, study_nodes, study_source = spec, None, "<study>"
         elif spec is not None:
             raise InputError("study spec", f"is a {type(spec).__name__}", "give a dict or a file")
+        if study_data is None and study_source != source:  # `study:` left empty in the spec
+            raise ModelFileError(
+                study_source,
+                "study",
+                "the section is empty",
+                "write the study under it (docs/file-format.md, `study`)",
+            )
         if study_data is None:
             raise ModelFileError(
                 source,
