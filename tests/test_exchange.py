@@ -580,6 +580,12 @@ def test_missing_file_unknown_layer_and_unknown_joint(tmp_path):
         "FIXED",
     )
     assert_refused(invoke("import", dxf, "--layer", "roof=R"), "layers.roof", "not a part")
+    # one layer in two parts was "layer FIXED holds 3 polylines"
+    assert_refused(
+        invoke("import", dxf, "--layer", "outline=FIXED"),
+        "layer FIXED is both the outline and the fixed",
+        "its own layer",
+    )
     assert_refused(invoke("import", dxf, "-j", "JOINT_X=bedding"), "no layer 'JOINT_X'")
     (tmp_path / "model.yaml").write_text(MODEL.replace("  cross:", "  crossing:"))
     assert_refused(

@@ -267,7 +267,18 @@ def _resolve(
             if drawn is not None and upper not in drawn:
                 continue
             joint_layers[name] = _joint_of(name[len(prefix) :], joints, name, source)
-    taken = {n.upper(): r for r, n in roles.items() if n is not None}
+    taken: dict[str, str] = {}
+    for role, name in roles.items():
+        if name is None:
+            continue
+        other = taken.setdefault(name.upper(), role)
+        if other != role:  # `--layer outline=FIXED`: one layer in two parts
+            raise _fail(
+                source,
+                f"layer {name} is both the {other} and the {role}",
+                "give each part of the section its own layer",
+                f"layers.{role}",
+            )
     for layer in joint_layers:
         if layer.upper() in taken:
             raise _fail(
