@@ -79,6 +79,28 @@ def test_point_load_off_the_model():
         rd.analyse(model)
 
 
+def test_a_point_load_along_a_joint_names_both_blocks():
+    """A force at a point of the joint between two stacked blocks, pointing
+    along it, pushes into neither: which block took it was left to the
+    order a spatial index returned them in.  It is refused, in either order
+    of the blocks; turned a little into the top block, it loads that one."""
+    ground = np.array([(-5, -1), (5, -1), (5, 0), (-5, 0)], float)
+    low = np.array([(0, 0), (1, 0), (1, 1), (0, 1)], float)
+    polys = [ground, low, low + np.array([0.0, 1.0])]
+    for order in ([0, 1, 2], [0, 2, 1]):
+        blocks = rd.Blocks.from_polygons(
+            [polys[i] for i in order], fixed=[i == 0 for i in order], ids=order, unit_weight=25.0
+        )
+        along = rd.PointLoad(x=0.5, y=1.0, fx=1.0, fy=0.0, name="strut")
+        model = rd.Model(blocks, _joint(), loads=rd.Loads(points=(along,)))
+        with pytest.raises(rd.InputError, match=r"strut: .* between blocks 1 and 2"):
+            rd.analyse(model)
+        into_top = rd.PointLoad(x=0.5, y=1.0, fx=1.0, fy=0.05, name="strut")
+        a = rd.analyse(model.replace(loads=rd.Loads(points=(into_top,))))
+        top = int(np.flatnonzero(blocks.ids == 2)[0])
+        assert a.stable and a.displacement[top, 0] > 0
+
+
 def test_the_model_is_not_changed_by_an_analysis():
     model = rd.Model(_blocks(GROUND, BLOCK), _joint())
     before = model.blocks.vertices.copy()

@@ -49,6 +49,16 @@ def _locate(
     unit = direction / np.maximum(np.hypot(*direction.T), 1e-300)[:, None]
     probe = shapely.points(xy + 10 * blocks.tolerance * unit)
     idx_pt, idx_block = tree.query(probe, predicate="intersects")
+    shared = np.flatnonzero(np.bincount(idx_pt, minlength=len(xy)) > 1)
+    if shared.size:  # along a joint: either block could take it (the order chose)
+        k = int(shared[0])
+        a, b = sorted(int(blocks.ids[i]) for i in idx_block[idx_pt == k][:2])
+        raise InputError(
+            names[k],
+            f"at ({xy[k, 0]:g}, {xy[k, 1]:g}) points along the boundary between blocks "
+            f"{a} and {b}, so it pushes into neither",
+            "turn it a little into the block it loads, or move it onto that block's face",
+        )
     owner = np.full(len(xy), -1)
     owner[idx_pt] = idx_block
     missing = np.flatnonzero(owner < 0)
