@@ -234,3 +234,29 @@ def test_the_bundled_perpendicular_joints_in_tonnes_and_kilonewtons(tmp_path):
     assert fos_kn.bracket[0] == pytest.approx(fos_t.bracket[0], rel=1e-6)
     assert abs(fos_kn.value - fos_t.value) <= 0.0025
     assert blocks_kn == blocks_t
+
+
+@pytest.mark.parametrize("shift", [(1e5, -3e4), (1e7, 0.0), (1e7, 1e6)])
+def test_a_line_load_in_site_coordinates(shift):
+    """A surcharge across two blocks resting on an inclined plane, at the
+    origin and in site coordinates.  At (1e7, 0) the check that a line load
+    lies on block boundaries united bands 2 tol wide around them, and the
+    union collapsed to nothing: a valid model was refused ("lies inside a
+    block")."""
+    d = np.radians(25.0)
+    turn = np.array([[np.cos(d), -np.sin(d)], [np.sin(d), np.cos(d)]])
+    ground = np.array([(-5, -1), (5, -1), (5, 0), (-5, 0)], float) @ turn.T
+    left = np.array([(0, 0), (1, 0), (1, 1), (0, 1)], float) @ turn.T
+    right = left + turn @ np.array([1.0, 0.0])
+
+    def fos(offset):
+        o = np.asarray(offset)
+        blocks = rd.Blocks.from_polygons([ground + o, left + o, right + o], fixed=[1, 0, 0])
+        top = rd.LineLoad(start=tuple(left[3] + o), end=tuple(right[2] + o), qx=0.0, qy=-20.0)
+        joint = rd.Joint(normal_stiffness=1e6, friction_angle=35)
+        return rd.factor_of_safety(rd.Model(blocks, joint, loads=rd.Loads(lines=(top,))))
+
+    exact = np.tan(np.radians(35.0)) / np.tan(d)  # the surcharge is vertical, like the weight
+    here, there = fos((0.0, 0.0)), fos(shift)
+    assert here.value == pytest.approx(exact, rel=0.005)
+    assert there.value == pytest.approx(here.value, rel=1e-6)

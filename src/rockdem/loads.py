@@ -176,7 +176,12 @@ def _on_boundaries(polys, tree, p0, p1, tol: float) -> float:
     near = polys[tree.query(seg, predicate="dwithin", distance=2 * tol)]
     if not len(near):
         return 0.0
-    band = shapely.union_all(shapely.buffer(shapely.boundary(near), 2 * tol))
+    # about p0: in site coordinates (x ~ 1e7) the union of bands 2 tol wide
+    # collapsed to nothing and a line load on the face was refused
+    origin = np.asarray(p0, dtype=float)
+    local = shapely.transform(shapely.boundary(near), lambda xy: xy - origin)
+    band = shapely.union_all(shapely.buffer(local, 2 * tol))
+    seg = shapely.LineString([(0.0, 0.0), np.asarray(p1, dtype=float) - origin])
     return float(shapely.length(shapely.intersection(seg, band)))
 
 
