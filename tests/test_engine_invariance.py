@@ -234,6 +234,18 @@ def test_the_bundled_perpendicular_joints_in_tonnes_and_kilonewtons(tmp_path):
     assert fos_kn.bracket[0] == pytest.approx(fos_t.bracket[0], rel=1e-6)
     assert abs(fos_kn.value - fos_t.value) <= 0.0025
     assert blocks_kn == blocks_t
+    # the report's trust statement says which the value is
+    from dataclasses import replace
+
+    from rockdem.trust import trust_statements
+
+    lo = fos_t.bracket[0]
+    wide = replace(fos_t, value=lo, bracket=(lo, lo * 1.05))
+    for fos in (fos_t, fos_kn, wide):
+        first = trust_statements(fos.failed_analysis, fos)[0]
+        widened = fos.value == fos.bracket[0] < fos.bracket[1]
+        assert ("its stable end" in first) == widened, first
+        assert ("the middle of that bracket" in first) == (not widened), first
 
 
 @pytest.mark.parametrize("shift", [(1e5, -3e4), (1e7, 0.0), (1e7, 1e6)])

@@ -58,11 +58,18 @@ def trust_statements(a: Analysis, fos: FactorOfSafety | None = None) -> list[str
     failed = fos.failed_analysis if fos is not None else (None if a.stable else a)
     if fos is not None and fos.value is not None:
         lo, hi = fos.bracket
-        out.append(
-            f"Factor of safety {fos.value:.4f}: equilibrium was found at F = {lo:.4f} and "
-            f"lost at F = {hi:.4f}; the value is the middle of that bracket "
-            f"(+-{(hi - lo) / 2:.4f})."
-        )
+        if fos.value == lo < hi:  # a bracket the search could not narrow
+            out.append(
+                f"Factor of safety {fos.value:.4f}: equilibrium was found at F = {lo:.4f} and "
+                f"failure confirmed at F = {hi:.4f}; the search could not narrow that bracket, "
+                "so the value is its stable end, the largest factor found stable."
+            )
+        else:
+            out.append(
+                f"Factor of safety {fos.value:.4f}: equilibrium was found at F = {lo:.4f} and "
+                f"lost at F = {hi:.4f}; the value is the middle of that bracket "
+                f"(+-{(hi - lo) / 2:.4f})."
+            )
         bound = fos.certified_upper_bound
         if bound is not None:
             out.append(f"Rigorous upper bound (equilibrium LP): F <= {bound:.4f}.")
