@@ -63,6 +63,8 @@ def _warn_unused_lines(system, cfg: ModelFile, own_lines: int, source: str, node
 ROCK_OVER_WATER = (1.0, 5.0)
 #: a water unit weight within this factor of the units' own is taken as meant
 WATER_SLACK = 1.5
+#: converted values may pass the rock band's edges by this factor
+ROUNDING = 1.01
 
 
 def _warn_unit_weights(model, cfg: ModelFile, source: str, nodes: Any) -> None:
@@ -85,7 +87,9 @@ def _warn_unit_weights(model, cfg: ModelFile, source: str, nodes: Any) -> None:
     free = ~model.blocks.fixed
     weights = model.blocks.unit_weight[free]
     lo, hi = ROCK_OVER_WATER[0] * gamma_w, ROCK_OVER_WATER[1] * gamma_w
-    odd = weights[(weights > 0) & ((weights < lo) | (weights > hi))]
+    # (ROUNDING: a unit weight converted from the band's edge in other units,
+    # 5 t/m^3 = 312.14 lbf/ft^3 against 5 x 62.4, is not outside it)
+    odd = weights[(weights > 0) & ((weights < lo / ROUNDING) | (weights > hi * ROUNDING))]
     if odd.size:
         _warn(
             f"{source}: a rock unit weight of {odd[0]:g} is not {ROCK_OVER_WATER[0]:g} to "
