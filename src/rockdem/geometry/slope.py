@@ -48,8 +48,8 @@ class SlopeGeometry:
     Attributes
     ----------
     blocks : rockdem.Blocks
-        Free blocks (ids 0, 1, ... ordered by centroid x then y) then the
-        fixed ground blocks.
+        Free blocks (ids 0, 1, ... by centroid: columns of equal x left to
+        right, each bottom to top) then the fixed ground blocks.
     joints : tuple of Joint
         Joint table: one per joint set (renamed to the set's name), then
         ``"bridge"`` (if any set is non-persistent), then ``"ground"`` (if a

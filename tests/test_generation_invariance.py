@@ -1,0 +1,109 @@
+"""Generated slopes must not depend on where the model lies: the same blocks
+(up to the shift), the same ids, the same slivers and the same factor of
+safety when the profile and the joint sets are moved together."""
+
+import copy
+
+import numpy as np
+import pytest
+import yaml
+
+import rockdem as rd
+from rockdem import geometry
+from rockdem.config import parse_model
+from rockdem.examples import example_path, list_examples
+
+SHIFTS = [(10.0, 0.0), (1e3, 0.0), (1e5, 0.0), (-7.3, 2.1), (12345.678, -987.65)]
+
+#: the bundled examples generated from a profile and joint sets
+SLOPES = [n for n in list_examples() if "slope" in yaml.safe_load(example_path(n).read_text())]
+
+
+def _moved(name: str, dx: float, dy: float) -> str:
+    """The slope of example ``name`` moved by (dx, dy) (stabilisation, bolts and
+    removals dropped: they name points of the unmoved model)."""
+    doc = copy.deepcopy(yaml.safe_load(example_path(name).read_text()))
+    slope = doc["slope"]
+    prof = slope["profile"]
+    if "points" in prof:
+        prof["points"] = [[x + dx, y + dy] for x, y in prof["points"]]
+    else:
+        tx, ty = prof.get("toe", (0.0, 0.0))
+        prof["toe"] = [tx + dx, ty + dy]
+    for js in slope["joint_sets"].values():
+        ox, oy = js.get("origin", (0.0, 0.0))
+        js["origin"] = [ox + dx, oy + dy]
+    if "fixed_region" in slope:
+        slope["fixed_region"] = [[x + dx, y + dy] for x, y in slope["fixed_region"]]
+    for key in ("stabilisation", "bolts", "remove"):
+        doc.pop(key, None)
+    assert not doc.get("loads", {}).get("points") and not doc.get("loads", {}).get("lines")
+    return yaml.safe_dump(doc)
+
+
+def _generate(name: str, dx: float = 0.0, dy: float = 0.0, monkeypatch=None):
+    """(model, SlopeGeometry) of example ``name`` moved by (dx, dy)."""
+    made = []
+    real = geometry.generate_slope
+
+    def keep(*args, **kw):
+        made.append(real(*args, **kw))
+        return made[-1]
+
+    monkeypatch.setattr(geometry, "generate_slope", keep)
+    model, _ = parse_model(_moved(name, dx, dy), source=f"{name}.yaml")
+    monkeypatch.setattr(geometry, "generate_slope", real)
+    assert len(made) == 1
+    return model, made[0]
+
+
+def _same_geometry(g0, g, dx, dy):
+    """Assert ``g`` is ``g0`` moved by (dx, dy): outlines id by id, slivers."""
+    b0, b = g0.blocks, g.blocks
+    assert b.n_blocks == b0.n_blocks
+    assert b.ids.tolist() == b0.ids.tolist()
+    assert b.fixed.tolist() == b0.fixed.tolist()
+    size = b0.extent
+    for i in range(b0.n_blocks):
+        a, c = b0.outline(i), b.outline(i) - [dx, dy]
+        assert a.shape == c.shape, f"block {i}: {len(a)} corners, moved {len(c)}"
+        assert np.abs(a - c).max() <= 1e-9 * size, f"block {i} differs when moved"
+    s0 = [(s.action, s.block) for s in g0.slivers]
+    s1 = [(s.action, s.block) for s in g.slivers]
+    assert s1 == s0
+    for p, q in zip(g0.slivers, g.slivers, strict=True):
+        assert q.area == pytest.approx(p.area, rel=1e-9)
+        assert np.allclose(np.subtract(q.centroid, (dx, dy)), p.centroid, rtol=0, atol=1e-9 * size)
+
+
+def test_the_bundled_slopes_are_found():
+    assert {"bedded-slope", "inclined-layers", "perpendicular-joints"} <= set(SLOPES)
+
+
+@pytest.mark.parametrize("name", ["inclined-layers", "perpendicular-joints", "bolted-slope"])
+def test_generated_examples_are_the_same_wherever_they_lie(name, monkeypatch):
+    _, g0 = _generate(name, monkeypatch=monkeypatch)
+    for dx, dy in SHIFTS:
+        _, g = _generate(name, dx, dy, monkeypatch=monkeypatch)
+        _same_geometry(g0, g, dx, dy)
+
+
+@pytest.mark.parametrize("dx, dy", [(0.0, 0.0), *SHIFTS, (3e6, 5e6)])
+def test_stacked_blocks_are_numbered_column_by_column_bottom_to_top(dx, dy):
+    """Layers between vertical joints have the same centroid x up to round-off:
+    ids go left to right by column and bottom to top in each, wherever the
+    slope lies (sorted by x then y, the last bits of x decided)."""
+    j = rd.Joint(normal_stiffness=1e6, friction_angle=35)
+    prof = geometry.Profile([(dx, 10 + dy), (dx + 9, 10 + dy)])
+    sets = [
+        geometry.JointSet("bed", 0, 0.7, j, origin=(dx, dy + 0.35)),
+        geometry.JointSet("cross", 90, 1.5, j, origin=(dx + 0.3, dy)),
+    ]
+    g = geometry.generate_slope(prof, sets, depth=10, boundary=(), min_block_fraction=0)
+    c = g.blocks.centroid - [dx, dy]
+    assert g.blocks.ids.tolist() == list(range(len(c)))
+    column = np.round(c[:, 0] / 0.75).astype(int)  # columns 1.5 m wide, centred 0.75 apart
+    assert (np.diff(column) >= 0).all()
+    same = np.diff(column) == 0
+    assert same.sum() >= len(c) - 8
+    assert (np.diff(c[:, 1])[same] > 0).all()
