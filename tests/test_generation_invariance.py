@@ -6,6 +6,7 @@ import copy
 
 import numpy as np
 import pytest
+import shapely
 import yaml
 
 import rockdem as rd
@@ -80,7 +81,7 @@ def test_the_bundled_slopes_are_found():
     assert {"bedded-slope", "inclined-layers", "perpendicular-joints"} <= set(SLOPES)
 
 
-@pytest.mark.parametrize("name", ["inclined-layers", "perpendicular-joints", "bolted-slope"])
+@pytest.mark.parametrize("name", SLOPES)
 def test_generated_examples_are_the_same_wherever_they_lie(name, monkeypatch):
     _, g0 = _generate(name, monkeypatch=monkeypatch)
     for dx, dy in SHIFTS:
@@ -107,3 +108,36 @@ def test_stacked_blocks_are_numbered_column_by_column_bottom_to_top(dx, dy):
     same = np.diff(column) == 0
     assert same.sum() >= len(c) - 8
     assert (np.diff(c[:, 1])[same] > 0).all()
+
+
+def test_bedded_slope_has_the_same_factor_of_safety_wherever_it_lies(monkeypatch):
+    """Moved by 10 m it gave FS 1.2124 instead of 1.1958: its bedding joint through
+    the toe passed 1e-15 m inside it and was not split there, so a 0.054 m2
+    sliver and the 1.90 m2 block above the toe were one bow-tie block."""
+    m0, g0 = _generate("bedded-slope", monkeypatch=monkeypatch)
+    assert [s.action for s in g0.slivers] == ["merged", "merged"]
+    fos0 = rd.factor_of_safety(m0).value
+    assert fos0 == pytest.approx(1.1958, abs=5e-4)
+    for dx, dy in [(10.0, 0.0), (1e3, 0.0), (1e5, 0.0)]:
+        m, g = _generate("bedded-slope", dx, dy, monkeypatch=monkeypatch)
+        assert len(g.slivers) == 2
+        assert rd.factor_of_safety(m).value == pytest.approx(fos0, rel=1e-6)
+
+
+@pytest.mark.parametrize("dx", [0.0, 0.1, 3.0, 10.0, 1e3, 1e5, 7e6])
+def test_a_joint_through_a_profile_corner_is_split_there(dx):
+    """Toe at (dx, 0), face 60 degrees, a joint dipping 30 through the toe: the
+    toe is a reflex corner of the section, so the joint runs through rock on
+    both sides of it: with a cross joint through (dx + 0.5, 0) it cuts 5 blocks,
+    one of them the 0.054 m2 triangle below the toe, wherever the slope lies
+    (unsplit at the toe, that triangle was part of the block above the joint)."""
+    j = rd.Joint(normal_stiffness=1e6, friction_angle=35)
+    prof = geometry.Profile.simple(10, 60, crest_length=10, toe_length=10, toe=(dx, 0.0))
+    sets = [
+        geometry.JointSet("bed", 30, 100.0, j, origin=(dx, 0.0)),
+        geometry.JointSet("cross", 120, 100.0, j, origin=(dx + 0.5, 0.0)),
+    ]
+    g = geometry.generate_slope(prof, sets, depth=6, boundary=(), min_block_fraction=0)
+    areas = sorted(shapely.area(g.polygons()).round(4).tolist())
+    assert len(areas) == 5, areas
+    assert areas[0] == pytest.approx(0.0541, abs=1e-4)  # the triangle below the toe
