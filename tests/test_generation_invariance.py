@@ -141,3 +141,99 @@ def test_a_joint_through_a_profile_corner_is_split_there(dx):
     areas = sorted(shapely.area(g.polygons()).round(4).tolist())
     assert len(areas) == 5, areas
     assert areas[0] == pytest.approx(0.0541, abs=1e-4)  # the triangle below the toe
+
+
+ROCK = rd.Joint(normal_stiffness=1e6, friction_angle=35, cohesion=10)
+BRIDGE = rd.Joint(normal_stiffness=1e6, friction_angle=40, cohesion=500, tensile_strength=100)
+
+
+def _crossing_at_the_toe(at, s):
+    """Two persistent sets crossing at the toe of a 70-degree face."""
+    prof = geometry.Profile.simple(20 * s, 70, crest_length=12 * s, toe_length=8 * s, toe=at(0, 0))
+    sets = [
+        geometry.JointSet("J1", 30, 2.0 * s, ROCK, origin=at(0, 0)),
+        geometry.JointSet("J2", 120, 2.5 * s, ROCK, origin=at(0, 0)),
+    ]
+    return geometry.generate_slope(prof, sets, depth=8 * s, ground_joint=ROCK), None
+
+
+def _benched_with_bridges(at, s):
+    """A benched slope, random spacing, rock bridges."""
+    prof = geometry.Profile.simple(
+        24 * s,
+        60,
+        bench_width=4 * s,
+        bench_height=8 * s,
+        crest_length=12 * s,
+        toe_length=10 * s,
+        toe=at(0, 0),
+    )
+    sets = [
+        geometry.JointSet("bed", 20, 1.6 * s, ROCK, origin=at(0, 0.4)),
+        geometry.JointSet(
+            "cross",
+            110,
+            3.0 * s,
+            ROCK,
+            origin=at(0, 0),
+            trace_length=2.5 * s,
+            gap=1.5 * s,
+            stagger=0.5,
+            spacing_sd=0.6 * s,
+            seed=3,
+        ),
+    ]
+    g = geometry.generate_slope(prof, sets, depth=8 * s, ground_joint=ROCK, bridge_joint=BRIDGE)
+    return g, None
+
+
+def _fixed_region_and_berm(at, s):
+    """Random dips, rock bridges, a fixed region, then cut to a berm."""
+    prof = geometry.Profile.simple(24 * s, 80, crest_length=14 * s, toe_length=10 * s, toe=at(0, 0))
+    sets = [
+        geometry.JointSet("top", 100, 1.8 * s, ROCK, origin=at(0.5, 0), dip_sd=2.0, seed=7),
+        geometry.JointSet(
+            "cross",
+            10,
+            2.5 * s,
+            ROCK,
+            origin=at(0, 0),
+            trace_length=3.0 * s,
+            gap=1.0 * s,
+            stagger=0.5,
+        ),
+    ]
+    deep = [at(-30, -12), at(-30, -2), at(12, -7), at(12, -12)]
+    g = geometry.generate_slope(
+        prof, sets, depth=10 * s, ground_joint=ROCK, bridge_joint=BRIDGE, fixed_region=deep
+    )
+    berm = [at(-40, 24), at(-9.0, 24), at(-6.8, 12), at(-2.116, 12), at(0, 0), at(20, 0)]
+    return g, geometry.cut_to_profile(g, berm)
+
+
+@pytest.mark.parametrize(
+    "make", [_crossing_at_the_toe, _benched_with_bridges, _fixed_region_and_berm]
+)
+def test_generated_slopes_are_the_same_moved_or_in_other_units(make):
+    """The same blocks, ids and slivers moved (up to 7e6 m) or in mm or km.
+    (Before, the two sets crossing at the toe moved by 10 m changed block 111.)"""
+    base = make(lambda x, y: (float(x), float(y)), 1.0)
+    for (dx, dy), s in [
+        ((10.0, 0.0), 1.0),
+        ((1e5, 3e3), 1.0),
+        ((5e5, 7e6), 1.0),
+        ((0.0, 0.0), 1e3),
+        ((-3.7, 1.1), 1e-3),
+    ]:
+        moved = make(lambda x, y, dx=dx, dy=dy, s=s: (x * s + dx, y * s + dy), s)
+        for g0, g in zip(base, moved, strict=True):
+            if g0 is None:
+                continue
+            b0, b = g0.blocks, g.blocks
+            assert b.ids.tolist() == b0.ids.tolist() and b.fixed.tolist() == b0.fixed.tolist()
+            for i in range(b0.n_blocks):
+                a, c = b0.outline(i), (b.outline(i) - [dx, dy]) / s
+                assert a.shape == c.shape and np.abs(a - c).max() <= 1e-9 * b0.extent, (dx, s, i)
+            assert [(x.action, x.block) for x in g.slivers] == [
+                (x.action, x.block) for x in g0.slivers
+            ]
