@@ -237,3 +237,30 @@ def test_generated_slopes_are_the_same_moved_or_in_other_units(make):
             assert [(x.action, x.block) for x in g.slivers] == [
                 (x.action, x.block) for x in g0.slivers
             ]
+
+
+def test_a_sliver_with_two_equal_neighbours_goes_to_the_same_one_wherever_it_lies():
+    """An isosceles sliver (0.00012 m2 at the right side) shares edges of the same
+    length (0.0156 m) with two blocks: equal to the bit unmoved, it went to the
+    first one listed; moved by (8374.15, -7327.9) m the round-off made the other
+    edge 6e-16 m longer and it went there.  Lengths within the tolerance are equal."""
+
+    def make(dx, dy):
+        prof = geometry.Profile([(dx, 10 + dy), (dx + 20, 10 + dy)])
+        sets = [
+            geometry.JointSet("a", 45, 2.0, ROCK, origin=(dx, dy)),
+            geometry.JointSet("b", 45, 2.0, ROCK, origin=(dx, dy + 0.08)),
+            geometry.JointSet("c", 135, 3.0, ROCK, origin=(dx + 0.3, dy)),
+        ]
+        return geometry.generate_slope(prof, sets, depth=10, boundary=())
+
+    g0 = make(0.0, 0.0)
+    assert len(g0.slivers) == 3
+    rng = np.random.default_rng(5)
+    for dx, dy in [(8374.15, -7327.9), (10.0, 0.0), *rng.uniform(-1e4, 1e4, (6, 2))]:
+        g = make(dx, dy)
+        assert [(s.action, s.block) for s in g.slivers] == [(s.action, s.block) for s in g0.slivers]
+        assert g.blocks.n_blocks == g0.blocks.n_blocks
+        for i in range(g0.blocks.n_blocks):
+            a, c = g0.blocks.outline(i), g.blocks.outline(i) - [dx, dy]
+            assert a.shape == c.shape and np.abs(a - c).max() <= 1e-9 * g0.blocks.extent, (dx, i)

@@ -13,6 +13,8 @@ import shapely
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
+from ..blocks import GEOMETRY_RTOL
+
 log = logging.getLogger(__name__)
 
 
@@ -121,6 +123,12 @@ def merge_slivers(
     """Merge every polygon smaller than ``small_area`` into its neighbour
     sharing the longest edge, repeating while merged groups stay small.
 
+    Shared lengths within the geometric tolerance (``GEOMETRY_RTOL`` x the
+    diagonal of all polygons) are equal; of such neighbours the largest
+    (areas within tolerance x diagonal are equal), then the leftmost, then the
+    lowest (x, y of the centroid within tolerance) is chosen: the choice does
+    not follow the round-off, so not where the model lies (see :func:`_choose`).
+
     Parameters
     ----------
     polys : ndarray of Polygon
@@ -142,8 +150,14 @@ def merge_slivers(
     """
     polys = np.asarray(polys, dtype=object)
     n0 = len(polys)
+    if n0:
+        x0, y0, x1, y1 = shapely.total_bounds(polys)
+        tol = GEOMETRY_RTOL * float(np.hypot(x1 - x0, y1 - y0))
+    else:
+        tol = 0.0
     origin = np.arange(n0)
     movable = np.ones(n0, dtype=bool) if movable is None else np.asarray(movable, bool).copy()
+
     def is_small(p):
         a = shapely.area(p)
         return (a < small_area) | (a <= thin * shapely.length(p))
@@ -172,10 +186,7 @@ def merge_slivers(
         uniq, inv = np.unique(key, return_inverse=True)
         tot = np.bincount(inv, w)
         uf, ug = uniq // n, uniq % n
-        order = np.lexsort((-tot, uf))
-        first = np.ones(len(order), dtype=bool)
-        first[1:] = uf[order][1:] != uf[order][:-1]
-        src, dst = uf[order][first], ug[order][first]
+        src, dst = _choose(uf, ug, tot, polys, n, tol)
         graph = coo_matrix((np.ones(len(src)), (src, dst)), shape=(n, n))
         _, labels = connected_components(graph, directed=False)
         sizes = np.bincount(labels)
@@ -200,14 +211,17 @@ def merge_slivers(
         group_pos = np.full(len(ok), -1)
         group_pos[ok_groups] = len(kept_idx) + np.arange(len(ok_groups))
         new_pos[done] = group_pos[relabel[labels[done]]]
-        polys = np.concatenate([polys[kept_idx], merged[ok_groups]]) if len(ok_groups) else polys[
-            kept_idx]
+        polys = (
+            np.concatenate([polys[kept_idx], merged[ok_groups]])
+            if len(ok_groups)
+            else polys[kept_idx]
+        )
         movable_new = np.concatenate([movable[kept_idx], np.ones(len(ok_groups), dtype=bool)])
         stuck_new = np.concatenate([stuck[kept_idx], np.zeros(len(ok_groups), dtype=bool)])
         # a group keeps the fixity rule of its members: movable if all were
         grp_mov = np.ones(len(ok), dtype=bool)
         np.logical_and.at(grp_mov, relabel[labels[done]], movable[done])
-        movable_new[len(kept_idx):] = grp_mov[ok_groups]
+        movable_new[len(kept_idx) :] = grp_mov[ok_groups]
         movable, stuck = movable_new, stuck_new
         origin = new_pos[origin]
         if len(ok_groups) == 0:
@@ -222,6 +236,32 @@ def merge_slivers(
         n_bad = sum(1 for r in report if not r[3])
         log.info("%d sliver blocks merged, %d could not be merged", len(report) - n_bad, n_bad)
     return polys, origin, report
+
+
+def _choose(
+    uf: np.ndarray, ug: np.ndarray, tot: np.ndarray, polys: np.ndarray, n: int, tol: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """The neighbour ``ug`` each sliver ``uf`` merges into: longest shared length
+    ``tot``, then largest area, then smallest centroid x, then y, each compared
+    within the tolerance.  (Lengths equal but for round-off were ranked by it:
+    an isosceles sliver went to one neighbour or the other as the model moved.)"""
+    extent = tol / GEOMETRY_RTOL
+    cen = shapely.get_coordinates(shapely.centroid(polys))
+    area = shapely.area(polys)
+    keep = np.ones(len(uf), dtype=bool)
+    for value, within in (
+        (tot, tol),
+        (area[ug], tol * extent),
+        (-cen[ug, 0], tol),
+        (-cen[ug, 1], tol),
+    ):
+        best = np.full(n, -np.inf)
+        np.maximum.at(best, uf[keep], value[keep])
+        keep &= value >= best[uf] - within
+    idx = np.flatnonzero(keep)
+    first = np.ones(len(idx), dtype=bool)
+    first[1:] = uf[idx][1:] != uf[idx][:-1]  # uf is sorted (np.unique keys)
+    return uf[idx][first], ug[idx][first]
 
 
 def insert_vertices(poly: shapely.Polygon, points: np.ndarray, tol: float) -> shapely.Polygon:
