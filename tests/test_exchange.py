@@ -942,3 +942,31 @@ def test_overwriting_results_refuses_to_leave_another_formats_files(tmp_path, fo
         "run", tmp_path / "box.yaml", "--out", folder, "--overwrite", "--format", "vtk", "-q"
     )
     assert both.exit_code == 0, both.stderr
+
+
+def test_a_trace_drawn_through_the_toe_cuts_there_wherever_the_drawing_lies():
+    """A bedding trace drawn through the toe, a reflex corner of the section,
+    runs through rock on both sides of it.  Whether GEOS split it at the
+    toe followed the round-off of the drawing's coordinates: moved by 60
+    random offsets up to 1e4, the blocks on either side of the toe came out
+    as one bow-tie block (86.08 m^2 for 28.35 + 57.74) in 23 of them."""
+    import shapely
+
+    from rockdem.exchange.dxf_cut import cut_section
+    from rockdem.exchange.dxf_in import Section, Trace
+
+    crest = 10.0 / np.tan(np.radians(60.0))
+    outline = np.array([(-10, -6), (20, -6), (20, 10), (crest, 10), (0, 0), (-10, 0)], float)
+    ground = np.array([(-10, -6), (20, -6), (20, -5), (-10, -5)], float)
+    slope = np.tan(np.radians(30.0))
+    trace = np.array([(-9.0, -9.0 * slope), (22.0, 22.0 * slope)])  # through (0, 0)
+
+    def areas(shift):
+        line = Trace("bedding", "JOINT_bedding", trace + shift)
+        drawn = Section("x", outline + shift, (ground + shift,), (line,), None, (), 6, 1.0, {}, {})
+        return sorted(float(shapely.Polygon(p).area) for p in cut_section(drawn).polygons)
+
+    here = areas(np.zeros(2))
+    assert here == pytest.approx([28.349365, 30.0, 57.735027, 235.048095], abs=1e-5)
+    for shift in np.random.default_rng(0).uniform(-1e4, 1e4, (60, 2)):
+        assert areas(shift) == pytest.approx(here, abs=1e-6), shift

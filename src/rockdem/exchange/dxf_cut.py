@@ -54,6 +54,10 @@ def cut_section(section: Section, *, max_blocks: int | None = None) -> SectionBl
     traces = np.array([shapely.LineString(t.points - origin) for t in section.traces], object)
     if max_blocks is not None:
         _check_crossings(traces, domain, max_blocks, source)
+    # a trace through a corner of the outline or of a fixed region (a bedding
+    # line drawn through the toe) is split there, whatever the round-off
+    corners = np.concatenate([shapely.get_coordinates(p.exterior)[:-1] for p in (outline, *fixed)])
+    traces = topo.through_corners(traces, corners, tol)
     lines = [shapely.LinearRing(outline.exterior), *(f.exterior for f in fixed), *traces]
     noded = shapely.node(shapely.multilinestrings(shapely.get_parts(np.array(lines, object))))
     faces = shapely.get_parts(shapely.polygonize(shapely.get_parts(noded)))
@@ -84,9 +88,9 @@ def cut_section(section: Section, *, max_blocks: int | None = None) -> SectionBl
             f"the traces cut {len(free):,} blocks, more than the limit of {max_blocks:,}",
             "raise the limit with `rockdem --max-blocks N ...` or draw fewer traces",
         )
-    cen = shapely.get_coordinates(shapely.centroid(free))
-    key = np.round(cen / (1e-6 * extent))  # ties within round-off sort the same anywhere
-    free = free[np.lexsort((key[:, 1], key[:, 0]))]
+    # columns left to right, each bottom to top, x equal within the tolerance
+    # (rounding to a grid split ties that straddled a grid line)
+    free = free[topo.reading_order(shapely.get_coordinates(shapely.centroid(free)), 10 * tol)]
     fxy, foff = topo.to_arrays(free, tol)
     corners = np.diff(foff)
     if (corners < 3).any():  # found by fuzzing: a 1e9 m wide section, blocks 10 m high

@@ -264,6 +264,54 @@ def _choose(
     return uf[idx][first], ug[idx][first]
 
 
+def reading_order(cen: np.ndarray, tol: float) -> np.ndarray:
+    """Order of blocks by centroid: columns left to right, each bottom to top.
+
+    Centroids whose x differs by at most ``tol`` from the previous one (sorted
+    by x) make one column, so blocks stacked above each other (equal x up to
+    round-off: layers between two vertical joints) are numbered bottom to top
+    wherever the model lies.  (Sorted by x then y, their order was that of
+    the last bits of x: the inclined-layers example numbered its columns
+    1.62, -0.82, 0.40, 2.84 m up, and moved by 1 km otherwise.)
+    """
+    by_x = np.argsort(cen[:, 0], kind="stable")
+    step = np.diff(cen[by_x, 0]) > tol
+    column = np.empty(len(cen), dtype=np.int64)
+    column[by_x] = np.concatenate([[0], np.cumsum(step)])
+    return np.lexsort((cen[:, 1], column))
+
+
+def through_corners(lines: np.ndarray, corners: np.ndarray, tol: float) -> np.ndarray:
+    """``lines`` with every corner within ``tol`` of a line's inside made a vertex of it.
+
+    Whether a joint through a corner of the section (the toe, a bench) is split
+    there otherwise depends on the last bits of the coordinates.  At a reflex
+    corner, where the joint runs through rock on both sides, an unsplit joint
+    passing 1e-15 m inside the corner leaves the blocks on either side of the
+    corner one bow-tie block.  (The bedded-slope example moved by 10 m: its
+    bedding joint through the toe made a 1.90 m2 block and a 0.054 m2 sliver
+    one block, FS 1.2124 instead of 1.1958.)
+    """
+    if len(lines) == 0 or len(corners) == 0:
+        return lines
+    tree = shapely.STRtree(lines)
+    ci, li = tree.query(shapely.points(corners), predicate="dwithin", distance=tol)
+    if ci.size == 0:
+        return lines
+    at = shapely.line_locate_point(lines[li], shapely.points(corners[ci]))
+    inner = (at > tol) & (at < shapely.length(lines[li]) - tol)
+    ci, li, at = ci[inner], li[inner], at[inner]
+    lines = lines.copy()
+    for k in np.unique(li):
+        own = li == k
+        xy = shapely.get_coordinates(lines[k])
+        along = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(xy, axis=0).T))])
+        pos = np.concatenate([along, at[own]])
+        pts = np.concatenate([xy, corners[ci[own]]])
+        lines[k] = shapely.linestrings(pts[np.argsort(pos, kind="stable")])
+    return lines
+
+
 def insert_vertices(poly: shapely.Polygon, points: np.ndarray, tol: float) -> shapely.Polygon:
     """``poly`` with every point lying on its outline (within ``tol``) made a vertex."""
     ring = np.asarray(poly.exterior.coords)

@@ -297,7 +297,7 @@ def generate_slope(
     # ------------------------------------------------------------ blocks
     free_idx = np.flatnonzero(~in_ground)
     free = faces[free_idx]
-    order = _reading_order(shapely.get_coordinates(shapely.centroid(free)), 10 * tol)
+    order = topo.reading_order(shapely.get_coordinates(shapely.centroid(free)), 10 * tol)
     free, free_idx = free[order], free_idx[order]
     fid = np.full(len(faces), -1)
     fid[free_idx] = np.arange(len(free))
@@ -363,28 +363,11 @@ def _move(geom, by):
     return shapely.transform(geom, lambda xy: xy + np.asarray(by, dtype=float))
 
 
-def _reading_order(cen: np.ndarray, tol: float) -> np.ndarray:
-    """Order of blocks by centroid: columns left to right, each bottom to top.
-
-    Centroids whose x differs by at most ``tol`` from the previous one (sorted
-    by x) make one column, so blocks stacked above each other (equal x up to
-    round-off: layers between two vertical joints) are numbered bottom to top
-    wherever the model lies.  (Sorted by x then y, their order was that of
-    the last bits of x: the inclined-layers example numbered its columns
-    1.62, -0.82, 0.40, 2.84 m up, and moved by 1 km otherwise.)
-    """
-    by_x = np.argsort(cen[:, 0], kind="stable")
-    step = np.diff(cen[by_x, 0]) > tol
-    column = np.empty(len(cen), dtype=np.int64)
-    column[by_x] = np.concatenate([[0], np.cumsum(step)])
-    return np.lexsort((cen[:, 1], column))
-
-
 def _arrangement(section: shapely.Polygon, segs: np.ndarray, extent: float) -> np.ndarray:
     """Faces of the planar arrangement of the section outline and the segments.
 
     A joint passing within the geometric tolerance of a corner of the section
-    is made to pass through it (see :func:`_through_corners`).
+    is made to pass through it (see :func:`._topology.through_corners`).
     """
     if len(segs) == 0:
         return np.array([section], dtype=object)
@@ -397,7 +380,7 @@ def _arrangement(section: shapely.Polygon, segs: np.ndarray, extent: float) -> n
     # keep non-empty line pieces only (GEOS node crashes on empty parts)
     parts = parts[(shapely.get_type_id(parts) == 1) & ~shapely.is_empty(parts)]
     corners = shapely.get_coordinates(section.exterior)[:-1]
-    parts = _through_corners(parts, corners, GEOMETRY_RTOL * extent)
+    parts = topo.through_corners(parts, corners, GEOMETRY_RTOL * extent)
     allg = shapely.multilinestrings(np.concatenate([parts, [section.exterior]]))
     noded = shapely.node(allg)
     faces = shapely.get_parts(shapely.polygonize(shapely.get_parts(noded)))
@@ -411,37 +394,6 @@ def _arrangement(section: shapely.Polygon, segs: np.ndarray, extent: float) -> n
     if (inside & ~solid).any():
         log.info("dropped %d faces of no area", int((inside & ~solid).sum()))
     return faces[inside & solid]
-
-
-def _through_corners(lines: np.ndarray, corners: np.ndarray, tol: float) -> np.ndarray:
-    """``lines`` with every corner within ``tol`` of a line's inside made a vertex of it.
-
-    Whether a joint through a corner of the section (the toe, a bench) is split
-    there otherwise depends on the last bits of the coordinates.  At a reflex
-    corner, where the joint runs through rock on both sides, an unsplit joint
-    passing 1e-15 m inside the corner leaves the blocks on either side of the
-    corner one bow-tie block.  (The bedded-slope example moved by 10 m: its
-    bedding joint through the toe made a 1.90 m2 block and a 0.054 m2 sliver
-    one block, FS 1.2124 instead of 1.1958.)
-    """
-    if len(lines) == 0 or len(corners) == 0:
-        return lines
-    tree = shapely.STRtree(lines)
-    ci, li = tree.query(shapely.points(corners), predicate="dwithin", distance=tol)
-    if ci.size == 0:
-        return lines
-    at = shapely.line_locate_point(lines[li], shapely.points(corners[ci]))
-    inner = (at > tol) & (at < shapely.length(lines[li]) - tol)
-    ci, li, at = ci[inner], li[inner], at[inner]
-    lines = lines.copy()
-    for k in np.unique(li):
-        own = li == k
-        xy = shapely.get_coordinates(lines[k])
-        along = np.concatenate([[0.0], np.cumsum(np.hypot(*np.diff(xy, axis=0).T))])
-        pos = np.concatenate([along, at[own]])
-        pts = np.concatenate([xy, corners[ci[own]]])
-        lines[k] = shapely.linestrings(pts[np.argsort(pos, kind="stable")])
-    return lines
 
 
 def _merge_ground(faces: np.ndarray, in_ground: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
