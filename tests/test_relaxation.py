@@ -336,3 +336,51 @@ def test_a_run_that_moved_only_the_first_blocks_shows_newtons_mechanism(monkeypa
     many = np.zeros_like(newton)
     many[free[: len(free) // 5]] = True  # a fifth of them: a mechanism of its own
     assert not first_movers(system, many, newton)
+
+
+_WET_BEDDED = """
+units: kN, m, kPa
+materials: {sandstone: {unit_weight: 25.0}}
+joints:
+  bedding: {normal_stiffness: 1.0e+6, friction_angle: 35, cohesion: 20, tensile_strength: 5,
+            residual_cohesion: 0}
+  cross: {normal_stiffness: 1.0e+6, friction_angle: 38, cohesion: 5}
+  ground: {normal_stiffness: 1.0e+6, friction_angle: 40, cohesion: 50}
+ground_joint: ground
+slope:
+  material: sandstone
+  profile: {height: 10, face_angle: 60, crest_length: 10, toe_length: 10}
+  depth: 6
+  joint_sets:
+    bedding: {dip: 30, spacing: 2.5}
+    cross: {dip: 120, spacing: 3.0, origin: [0.5, 0]}
+loads:
+  seismic_h: 0.05
+  water_table: [[-20, 7], [-5, 4], [0, 0], [10, 0]]
+  water_unit_weight: 9.81
+  points: [{at: [-10, 10], force: [0, -50], name: footing}]
+  lines: [{start: [-15, 10], end: [-12, 10], q: [0, -20], q_end: [0, -10], name: surcharge}]
+analysis: {load_steps: 5}
+"""
+
+
+def test_a_relaxed_equilibrium_lost_to_brittle_joints_is_relaxed_again(tmp_path):
+    """The bundled bedded slope, wet, with kh 0.05, a footing and a
+    surcharge, brittle bedding (c 20 -> 0, tension 5).  At load step 3
+    Newton stalled; dynamic relaxation found equilibrium, but the joints
+    that failed in it lost their cohesion when it was committed and the
+    equilibrium was lost: the run said UNDECIDED while `fos` proved FS 0.88
+    by the LP.  The relaxation now goes on from that state and finds the
+    blocks moving: unstable, confirmed, as the factor of safety says."""
+    from rockdem.config import load_model
+
+    path = tmp_path / "wet.yaml"
+    path.write_text(_WET_BEDDED)
+    model, _ = load_model(path)
+    a = rd.analyse(model)
+    assert not a.stable
+    assert a.evidence.proof in {"dynamic-relaxation", "lp-certificate"}, a.evidence
+    if a.evidence.proof == "dynamic-relaxation":
+        assert a.evidence.relaxation.startswith("dynamic relaxation: mechanism")
+    fos = rd.factor_of_safety(model)
+    assert fos.value is not None and fos.value < 1.0
