@@ -303,3 +303,28 @@ def test_a_trial_support_goes_on_the_slope_face_of_the_plane_failure_example():
     x, y = exposed_point(model, moving)
     assert 0.0 < y < 10.0
     assert x == pytest.approx(-y / np.tan(np.radians(60.0)), abs=1e-6)
+
+
+def test_an_unstable_stage_names_the_joints_giving_way():
+    """The bundled bedded slope cut to a vertical 10 m face.  The unstable
+    stage reported "joints failed 0": its state is not committed, and the
+    count was of failures carried onto interfaces the cut made anew.  Now a
+    stable stage counts the joints whose springs first failed in it, an
+    unstable one those sliding or open as equilibrium was lost."""
+    from rockdem.config import load_model
+    from rockdem.examples import example_path
+
+    model, _ = load_model(example_path("bedded-slope"))
+    vertical = Stage("vertical face", profile=((-20, 10), (-5.7735, 10), (-5.7735, 0), (20, 0)))
+    ex = excavate_in_stages(model, [vertical])
+    before, cut = ex.stages
+    assert before.stable and not cut.stable
+    now = cut.analysis.interfaces.current_name[cut.new_failures]
+    assert len(cut.new_failures) > 0 and set(now) <= {"sliding", "open"}
+    rows = [r for r in ex.failures_by_stage() if r["stage"] == 1]
+    assert len(rows) == len(cut.new_failures)
+    assert {r["state"] for r in rows} <= {"sliding", "open"}
+    # before excavation: the joints whose springs first failed in its load steps
+    springs = before.analysis.system.springs
+    ff = before.analysis.state.first_failure
+    assert set(before.new_failures) == set(np.unique(springs.interface[ff >= 0]))

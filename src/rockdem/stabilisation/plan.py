@@ -244,7 +244,8 @@ def save_pictures(result: Study | Stabilisation, folder, *, dpi: int = 110) -> l
                 title=f"stage {s.number}: {s.name} "
                 f"({'stable' if s.stable else 'unstable'} at "
                 f"F = {format_factor(s.analysis.strength_factor)}, "
-                f"{len(s.new_failures)} joints failed in this stage)",
+                f"{len(s.new_failures)} joints "
+                f"{'failed in this stage' if s.stable else 'giving way'})",
             )
             fig.tight_layout()
             path = folder / f"stage-{s.number:02d}.png"

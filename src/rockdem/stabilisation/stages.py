@@ -19,7 +19,7 @@ import numpy as np
 
 from ..analysis import analyse, analyse_from
 from ..model import Model
-from ..results import Analysis
+from ..results import CURRENT_NAMES, Analysis
 from ..solver import System, build_system
 from ..spring_law import SpringState
 from . import _edit
@@ -51,7 +51,10 @@ class StageResult:
     stage_step : int
         The step number this stage was solved as.
     new_failures : ndarray of int
-        Interfaces (positions in ``analysis``) that failed during this stage.
+        Interfaces (positions in ``analysis``) that failed during this stage:
+        with a spring point whose first failure is this stage; for an
+        unstable stage (no state committed), those sliding or open as
+        equilibrium was lost (the joints giving way, failed before or not).
     removed_area : float
         Area removed by this stage.
     """
@@ -86,10 +89,24 @@ class Excavation:
         for s in self.stages:
             r = s.analysis.interfaces
             for i in s.new_failures:
+                state = r.state_name[i] if s.stable else r.current_name[i]
                 rows.append({"stage": s.number, "stage_name": s.name, "interface": int(i),
                              "block_a": int(r.block_a[i]), "block_b": int(r.block_b[i]),
-                             "kind": str(r.kind[i]), "state": str(r.state_name[i])})
+                             "kind": str(r.kind[i]), "state": str(state)})
         return rows
+
+
+def _failed_in_stage(a, step: int) -> np.ndarray:
+    """Interfaces of ``a`` that failed in the stage solved as ``step``.  (By
+    interface keys, the failures carried onto interfaces the stage cut anew
+    counted as new, and an unstable stage, whose state is not committed,
+    listed only those: "joints failed" named none of the joints that gave way,
+    often 0, since they had failed under gravity already.)"""
+    faces = a.interfaces
+    if a.stable:
+        fresh = a.state.first_failure == step
+        return np.unique(a.system.springs.interface[fresh]).astype(np.int64)
+    return np.flatnonzero(faces.current >= CURRENT_NAMES.index("sliding")).astype(np.int64)
 
 
 def _keys(system: System) -> dict:
@@ -188,11 +205,7 @@ def excavate_in_stages(model: Model, stages: Sequence[Stage], *,
             state0 = carry_state(prev_sys, prev.state, sys_k)
             q0 = _carry_q(prev_sys, prev.displacement, sys_k)
             a = analyse_from(sys_k, state0, q0, stage=step)
-            before = _failed_keys(prev_sys, prev)
-            now = _keys(sys_k)
-            new = [i for key, i in now.items() if a.interfaces.state[i] > 0
-                   and key not in before and _flip(key) not in before]
-            new_failures = np.asarray(sorted(new), dtype=np.int64)
+            new_failures = _failed_in_stage(a, step)
         else:
             a = analyse(sys_k)
             new_failures = a.failed_interfaces
@@ -203,12 +216,3 @@ def excavate_in_stages(model: Model, stages: Sequence[Stage], *,
         prev_sys, prev = sys_k, a
     return Excavation(tuple(results), f"all {len(stages)} stages stable")
 
-
-def _flip(key):
-    a, b, x0, y0, x1, y1 = key
-    return (b, a, x1, y1, x0, y0)
-
-
-def _failed_keys(system: System, a: Analysis) -> set:
-    keys = _keys(system)
-    return {key for key, i in keys.items() if a.interfaces.state[i] > 0}
