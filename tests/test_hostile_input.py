@@ -1141,3 +1141,28 @@ def test_a_slope_beyond_the_machines_memory_is_refused_whatever_the_limit(monkey
     sets = [JointSet("bedding", 20, 1.0, joint), JointSet("cross", 100, 1.0, joint)]
     with pytest.raises(rd.InputError, match="more than this machine's"):
         generate_slope(Profile.simple(10, 60), sets, depth=5, max_blocks=10**12)
+
+
+@pytest.mark.parametrize("existed", [False, True])
+def test_results_written_meanwhile_by_another_command_are_kept_and_so_are_these(
+    tmp_path, existed
+):
+    """Two commands writing into the same --out: each checks the folder before
+    it computes, and the second to finish moved its files over the first's
+    (the folder had appeared meanwhile), both exiting 0.  Without
+    --overwrite both result sets are kept now, and the error says where."""
+    from rockdem.errors import InputError
+    from rockdem.output import staged_folder
+
+    out = tmp_path / "results"
+    if existed:
+        out.mkdir()
+    with pytest.raises(InputError, match=r"from another command.*kept in (\S+)") as info:
+        with staged_folder(out, overwrite=False) as tmp:
+            (tmp / "result.json").write_text("ours")
+            out.mkdir(exist_ok=True)  # the other command, finishing first
+            (out / "result.json").write_text("theirs")
+    assert (out / "result.json").read_text() == "theirs"
+    kept = info.value.args[0].split("kept in ")[-1].strip()
+    assert (Path(kept) / "result.json").read_text() == "ours"
+    assert Path(kept).parent == tmp_path

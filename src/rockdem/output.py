@@ -215,7 +215,7 @@ def write_results(
         The files written.
     """
     folder = check_output_dir(folder, overwrite=overwrite, extra_files=extra_files)
-    with staged_folder(folder) as tmp:
+    with staged_folder(folder, overwrite) as tmp:
         for name in ("blocks", "interfaces", "springs", "bolts"):
             _write_csv(tmp / f"{name}.csv", tables.get(name, []), _COLUMNS[name], units)
         doc = dict(document)
@@ -234,12 +234,17 @@ def write_results(
 
 
 @contextmanager
-def staged_folder(folder: Path) -> Iterator[Path]:
+def staged_folder(folder: Path, overwrite: bool = True) -> Iterator[Path]:
     """A temporary folder beside ``folder`` to write into; when the block ends
     without error its files are moved into ``folder`` (the folder itself is
     renamed into place when it did not exist), else it is removed: the
     results appear all or nothing, and files already in ``folder`` that were
-    not written again are left as they are."""
+    not written again are left as they are.
+
+    ``overwrite=False``: where files of the same names appeared in ``folder``
+    while the results were computed (another command writing there), they are
+    kept, and so are these results, in a folder beside it named in the error.
+    """
     parent = folder.parent
     parent.mkdir(parents=True, exist_ok=True)
     tmp: Path | None = Path(tempfile.mkdtemp(prefix=f".{folder.name}.", suffix=".tmp", dir=parent))
@@ -255,6 +260,17 @@ def staged_folder(folder: Path) -> Iterator[Path]:
             except OSError:  # created meanwhile: fall back to moving file by file
                 folder.mkdir(exist_ok=True)
         if tmp is not None:
+            taken = [p.name for p in sorted(tmp.iterdir()) if (folder / p.name).exists()]
+            if taken and not overwrite:
+                kept = Path(tempfile.mkdtemp(prefix=f"{folder.name}-", dir=parent))
+                os.rmdir(kept)
+                os.rename(tmp, kept)
+                tmp = None
+                raise InputError(
+                    f"--out {folder}",
+                    f"received {taken[0]} from another command while this one ran",
+                    f"this run's results are kept in {kept}",
+                )
             for path in sorted(tmp.iterdir()):
                 os.replace(path, folder / path.name)
     finally:
