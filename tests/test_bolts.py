@@ -375,3 +375,41 @@ def test_a_bolt_far_stiffer_than_the_joint_it_crosses_is_refused(tmp_path):
     # the limit: 1e4 x kn x the interface's length, at least the blocks' mean size
     # (here sqrt((10 + 1) / 2) = 2.35 m, over the 1 m interface)
     assert "give axial_stiffness: 2.35e+10 or less" in str(info.value)
+
+
+def _stack(*bolts):
+    """Two 4 x 2 blocks stacked on fixed ground, kh 0.3 (found by fuzzing)."""
+    blocks = rd.Blocks.from_polygons(
+        [
+            [(-5, -1), (9, -1), (9, 0), (-5, 0)],
+            [(0, 0), (4, 0), (4, 2), (0, 2)],
+            [(0, 2), (4, 2), (4, 4), (0, 4)],
+        ],
+        fixed=[True, False, False],
+        unit_weight=25.0,
+    )
+    joint = Joint(normal_stiffness=1e6, friction_angle=20)
+    return rd.Model(blocks, joint, loads=rd.Loads(seismic_h=0.3), bolts=list(bolts))
+
+
+@pytest.mark.parametrize(
+    ("bolt", "words"),
+    [
+        # from the top, out through the corner (4, 2) into the air: it held
+        # the upper block as if anchored in the lower one, FS 2.797 for 1.213
+        (dict(head=(2, 4), angle=-45, length=np.hypot(2, 2) * 1.5), "crosses no joint"),
+        # down the free face x = 4, in no rock: it pushed, FS 1.173
+        (dict(head=(4, 3), angle=270, length=2.0), "crosses no joint"),
+        # the head 1 m inside the upper block, not on a face: FS 1.184
+        (dict(head=(2, 3), angle=270, length=2.0), "inside the rock"),
+    ],
+)
+def test_a_bolt_out_of_the_rock_or_headed_inside_it_is_refused(bolt, words):
+    plain = rd.factor_of_safety(_stack())
+    assert plain.value == pytest.approx(np.tan(np.radians(20)) / 0.3, rel=0.005)
+    model = _stack(Bolt(capacity=100.0, axial_stiffness=1e5, **bolt))
+    with pytest.raises(rd.InputError, match=words):
+        rd.factor_of_safety(model)
+    # a bolt from the top through both joints into the ground is taken
+    down = _stack(Bolt(head=(2, 4), angle=270, length=5.0, capacity=100.0, axial_stiffness=1e5))
+    assert rd.factor_of_safety(down).value is not None

@@ -287,6 +287,13 @@ def place_bolts(bolts, blocks, faces, asm):
                 f"the head ({head[0]:g}, {head[1]:g}) is not on the rock in the bolt's direction",
                 "put the head on the face and point the bolt into the rock",
             )
+        behind = shapely.points(head - max(10 * tol, reach) * e)
+        if len(tree.query(behind, predicate="within")):  # (found by fuzzing: 2 m in)
+            raise InputError(
+                where,
+                f"the head ({head[0]:g}, {head[1]:g}) is inside the rock, not on its face",
+                "put the head on the face (the bolt is drilled from the free surface)",
+            )
         r = bolt.length * e
         s = P1 - P0
         qp = P0 - head
@@ -305,6 +312,19 @@ def place_bolts(bolts, blocks, faces, asm):
         hit = hit[keep]
         free = ~(blocks.fixed[faces.block_a[hit]] & blocks.fixed[faces.block_b[hit]])
         hit = hit[free]
+        # rock on both sides: a bolt that leaves the rock through a corner of
+        # an interface, or runs along a free face, crosses nothing there
+        # (found by fuzzing: one out through a corner into the air held the
+        # block above as if anchored, FS 2.797 for 1.213)
+        step = max(10 * tol, 1e-6 * min(bolt.length, blocks.extent))
+        sides = [
+            shapely.points(head + (t[hit, None] * bolt.length + sign * step) * e)
+            for sign in (-1.0, 1.0)
+        ]
+        in_rock = [
+            np.isin(np.arange(len(hit)), tree.query(pt, predicate="within")[0]) for pt in sides
+        ]
+        hit = hit[in_rock[0] & in_rock[1]]
         if not len(hit):
             raise InputError(
                 where,
