@@ -484,3 +484,28 @@ def test_differences_print_without_a_negative_zero():
     assert signed_percent(-0.0004) == "+0.0%"
     assert signed_percent(0.0123) == "+1.2%"
     assert signed_percent(-0.05) == "-5.0%"
+
+
+def test_sarma_rates_a_chain_of_three_wedges():
+    """Sarma (1979), non-vertical slices: three wedges on a bilinear base
+    (phi 30, c 5) with interfaces of phi 35 between them.  An independent
+    solution of Sarma's equations for these wedges gives 1.19421 with every
+    face in compression.  `rockdem le` refused every such chain ("3 sliding
+    faces would carry tension"): it took the first root of Kc(F) from F =
+    0.02 up, which lies beside a pole of the chain's equations; it takes the
+    largest root now."""
+    ground = [(15, -3), (0, 0), (-10, 2), (-20, 9), (-24, 16), (-35, 16), (-35, -12), (15, -12)]
+    wedges = [
+        [(0.0, 0.0), (-6.5, 13.0), (-10.0, 2.0)],
+        [(-10.0, 2.0), (-6.5, 13.0), (-8.0, 16.0), (-16.0, 16.0), (-20.0, 9.0)],
+        [(-20.0, 9.0), (-16.0, 16.0), (-24.0, 16.0)],
+    ]
+    blocks = rd.Blocks.from_polygons([ground, *wedges], fixed=[1, 0, 0, 0], unit_weight=25.0)
+    inter = rd.Joint(normal_stiffness=1e6, friction_angle=35.0)
+    base = rd.Joint(normal_stiffness=1e6, friction_angle=30.0, cohesion=5.0, residual_cohesion=5.0)
+    model = rd.Model(blocks, [inter, base], ground=1)
+    fos, le = _dem_and_sarma(model)
+    assert le.reason == "" and le.fos == pytest.approx(1.19421, rel=1e-4)
+    assert fos.value == pytest.approx(1.19421, rel=0.002)
+    assert len(le.bodies) == 3
+    assert all(f.normal_force > 0 for f in le.faces)

@@ -385,11 +385,9 @@ def _solve_component(members, own, f_body, weight, vx):
         fos = float("inf")
         x = x1
     else:
-        k = int(np.argmax(ok & (values <= 0)))
-        lo = grid[k - 1]
-        from scipy.optimize import brentq  # 0.13 s to import: not at start-up
-
-        fos = float(brentq(kc, lo, grid[k], xtol=1e-12))
+        fos = _largest_root(kc, grid, values)
+        if fos is None:
+            return (None, float(x1[-1]), "the faces of the mechanism give a singular system", {})
         x = solve(fos)
     total = float(weight[members].sum())
     forces = {}
@@ -407,6 +405,25 @@ def _solve_component(members, own, f_body, weight, vx):
             {},
         )
     return fos, float(x1[-1]), "", forces
+
+
+def _largest_root(kc, grid, values) -> float | None:
+    """The largest factor at which ``kc`` falls through zero (+ to -): the
+    limit the full-strength state is connected to.  Sign changes through a
+    pole (where tan(phi) / F makes a chain's system singular, at F ~ 0.2-0.5
+    for wedge chains) are skipped: there ``kc`` does not vanish.  (The first
+    change from F = 0.02 up was taken: on three-wedge chains it was beside
+    such a pole, with tensile faces, and every mechanism was refused.)"""
+    from scipy.optimize import brentq  # 0.13 s to import: not at start-up
+
+    ok = np.isfinite(values)
+    change = np.flatnonzero(ok[:-1] & ok[1:] & (values[:-1] > 0) & (values[1:] <= 0))
+    scale = float(np.median(np.abs(values[ok]))) or 1.0
+    for k in change[::-1]:
+        root = float(brentq(kc, grid[k], grid[k + 1], xtol=1e-12))
+        if abs(kc(root)) <= 1e-6 * scale:
+            return root
+    return None
 
 
 def _ids(values, limit=12) -> str:
