@@ -328,3 +328,26 @@ def test_an_unstable_stage_names_the_joints_giving_way():
     springs = before.analysis.system.springs
     ff = before.analysis.state.first_failure
     assert set(before.new_failures) == set(np.unique(springs.interface[ff >= 0]))
+
+
+def test_a_design_trials_further_removal_keeps_the_removal_limit(tmp_path):
+    """Found by fuzzing: `max_removal: 0.01` stopped the block removal, but a
+    design trial with `stabilise: true` went on to remove 20% of the rock.
+    The limit now holds for the trial's removal and what follows it."""
+    from rockdem.config import load_model
+    from rockdem.examples import example_path
+    from rockdem.stabilisation.plan import study
+
+    text = example_path("bedded-slope").read_text()
+    text += (
+        "stabilisation:\n  target_fos: 3\n  max_removal: 0.05\n"
+        "  trials:\n    - {name: t, remove: {blocks: [16]}, stabilise: true}\n"
+    )
+    path = tmp_path / "m.yaml"
+    path.write_text(text)
+    model, cfg = load_model(path)
+    result = study(model, cfg, support=False, stages=False)
+    (design,) = result.designs
+    rock = float(model.blocks.area[~model.blocks.fixed].sum())
+    assert design.then is not None and not design.then.reached
+    assert design.total_removed_area <= 0.05 * rock

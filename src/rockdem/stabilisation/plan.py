@@ -188,12 +188,16 @@ def _study(model, cfg, target_fos, support, stages, width) -> Study:
             f = rate(m, width=width)
         then = None
         if t.stabilise and not meets(f, target):
+            # the limit on removal holds for the slope as designed: what the
+            # trial removed counts (found by fuzzing: a 1% limit, 20% removed)
+            rock = float(model.blocks.area[~model.blocks.fixed].sum())
+            allowed = (spec.max_removal * rock - area) / max(rock - area, 1e-300)
             with _progress.stage(f"design {t.name}, further removal"):
                 then = stabilise(
                     m,
                     target,
                     max_rounds=spec.max_rounds,
-                    max_removal=1.0,
+                    max_removal=min(max(allowed, 1e-12), 1.0),
                     smallest_set=spec.smallest_set,
                     width=width,
                     units=units,
