@@ -501,3 +501,31 @@ def test_unit_weights_that_do_not_fit_the_units_are_warned(tmp_path, change, fra
         bad = text.replace("unit_weight: 25", "unit_weight: 2.5").split("loads:")[0]
     said = issued(bad)
     assert len(said) == 1 and fragment in said[0], said
+
+
+def test_pore_pressure_ratio_errors_name_the_key_and_line(tmp_path):
+    """Found by fuzzing: r_u with a water table was reported as "loads
+    pore_pressure_ratio ..." with no line; r_u on weightless rock as
+    "water_unit_weight is 0 or missing: a water table needs it", with no
+    water table in the file."""
+    from rockdem.config import load_model
+    from rockdem.examples import example_path
+
+    text = example_path("bedded-slope").read_text()
+    path = tmp_path / "m.yaml"
+    both = text.replace(
+        "  seismic_h: 0.0\n",
+        "  seismic_h: 0.0\n  pore_pressure_ratio: 0.3\n"
+        "  water_table: [[-20, 8], [0, 0], [20, 0]]\n  water_unit_weight: 9.81\n",
+    )
+    path.write_text(both)
+    with pytest.raises(ModelFileError) as info:
+        load_model(path)
+    line = both.splitlines().index("  pore_pressure_ratio: 0.3") + 1
+    assert str(info.value).startswith(f"{path}:{line}: loads.pore_pressure_ratio: is given with")
+    weightless = text.replace("unit_weight: 25.0", "unit_weight: 0").replace(
+        "  seismic_h: 0.0\n", "  seismic_h: 0.0\n  pore_pressure_ratio: 0.3\n"
+    )
+    path.write_text(weightless)
+    with pytest.raises(ModelFileError, match="pore_pressure_ratio: needs the weight of the rock"):
+        load_model(path)

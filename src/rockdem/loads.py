@@ -199,6 +199,12 @@ def joint_water(blocks: Blocks, loads: Loads) -> Loads:
         return loads
     free = ~blocks.fixed
     gamma = float(blocks.weight[free].sum() / blocks.area[free].sum())
+    if not gamma > 0:  # (found by fuzzing: "water_unit_weight is 0 or missing")
+        raise InputError(
+            "loads pore_pressure_ratio",
+            "needs the weight of the rock, and the free blocks weigh nothing",
+            "give the rock a unit weight, or leave the pore-pressure ratio out",
+        )
     table = rock_surface(blocks)
     return replace(loads, water_table=table, water_unit_weight=ru * gamma, pore_pressure_ratio=0.0)
 

@@ -149,7 +149,11 @@ def _from_engine(
         label = where
     elif where in names:
         loc, label = names[where], ""
-    elif where in ("loads water_table", "loads water_unit_weight"):  # found by fuzzing
+    elif where in (  # found by fuzzing
+        "loads water_table",
+        "loads water_unit_weight",
+        "loads pore_pressure_ratio",
+    ):
         loc, label = ("loads", where.split()[1]), ""  # (was blamed on `slope`)
     elif cfg.slope is not None:
         loc, label = ("slope",), ("" if where == "slope" else where)
