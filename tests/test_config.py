@@ -529,3 +529,27 @@ def test_pore_pressure_ratio_errors_name_the_key_and_line(tmp_path):
     path.write_text(weightless)
     with pytest.raises(ModelFileError, match="pore_pressure_ratio: needs the weight of the rock"):
         load_model(path)
+
+
+def test_seismic_load_with_gravity_off_is_warned(tmp_path):
+    """Found by fuzzing: `gravity: false` with kh 0.3 pushes the blocks
+    sideways by 0.3 W with no weight holding them, silently."""
+    import warnings
+
+    from rockdem.config import load_model
+    from rockdem.errors import ModelWarning
+    from rockdem.examples import example_path
+
+    text = example_path("bedded-slope").read_text()
+    path = tmp_path / "m.yaml"
+
+    def issued(model_text: str) -> list[str]:
+        path.write_text(model_text)
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always", ModelWarning)
+            load_model(path)
+        return [str(w.message) for w in caught if issubclass(w.category, ModelWarning)]
+
+    assert issued(text.replace("seismic_h: 0.0", "seismic_h: 0.1")) == []
+    said = issued(text.replace("seismic_h: 0.0", "seismic_h: 0.1\n  gravity: false"))
+    assert len(said) == 1 and "loads.seismic_h with gravity off" in said[0], said

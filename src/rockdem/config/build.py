@@ -13,7 +13,13 @@ import numpy as np
 from ..errors import InputError
 from ..geometry.size import MAX_BLOCKS, memory_for
 from ..interfaces import check_held
-from .diagnose import _from_engine, _warn_loose_tolerance, _warn_unit_weights, _warn_unused_lines
+from .diagnose import (
+    _from_engine,
+    _warn_loose_tolerance,
+    _warn_seismic_without_gravity,
+    _warn_unit_weights,
+    _warn_unused_lines,
+)
 from .errors import Loc, ModelFileError, _keypath, _line
 from .sections import ProfileSpec
 from .spec import ModelFile
@@ -192,6 +198,7 @@ def build_model(
             raise
         _warn_unused_lines(system, cfg, own_lines, source, nodes)
         _warn_unit_weights(model, cfg, source, nodes)
+        _warn_seismic_without_gravity(model, source, nodes)
     except ModelFileError:
         raise
     except InputError as exc:

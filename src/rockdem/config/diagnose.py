@@ -98,6 +98,23 @@ def _warn_unit_weights(model, cfg: ModelFile, source: str, nodes: Any) -> None:
         )
 
 
+def _warn_seismic_without_gravity(model, source: str, nodes: Any) -> None:
+    """Seismic coefficients scale the blocks' weight; with gravity off that
+    force acts with no weight holding the blocks down (found by fuzzing: kh
+    0.3 alone, a push of 0.3 W with no normal force, read UNSTABLE)."""
+    loads = model.loads
+    if loads.gravity or not (loads.seismic_h or loads.seismic_v):
+        return
+    key = "seismic_h" if loads.seismic_h else "seismic_v"
+    line = _line(nodes, ("loads", key))
+    where = f"{source}:{line}" if line else source
+    _warn(
+        f"{where}: loads.{key} with gravity off: the seismic force (the coefficient x the "
+        "blocks' weight) acts with no weight holding the blocks; set `gravity: true` "
+        "for a pseudo-static analysis"
+    )
+
+
 def _warn(text: str) -> None:
     """Issue a :class:`ModelWarning` (at the caller of ``load_model``)."""
     warnings.warn(ModelWarning(text), stacklevel=5)
