@@ -351,3 +351,25 @@ def test_a_design_trials_further_removal_keeps_the_removal_limit(tmp_path):
     rock = float(model.blocks.area[~model.blocks.fixed].sum())
     assert design.then is not None and not design.then.reached
     assert design.total_removed_area <= 0.05 * rock
+
+
+def test_a_stage_removing_only_rock_already_excavated_says_so(tmp_path):
+    """Found by fuzzing: two stages with the same region; the second was
+    refused as "does not overlap the model's free blocks (they span x
+    -15.8 to 10 ...)", a region plainly inside that span."""
+    from rockdem.config import ModelFileError, load_model
+    from rockdem.examples import example_path
+
+    region = "[[-8, 7], [0, 7], [0, 12], [-8, 12]]"
+    text = example_path("bedded-slope").read_text() + (
+        "stabilisation:\n  stages:\n"
+        f"    - {{name: a, remove: {{regions: [{region}]}}}}\n"
+        f"    - {{name: b, remove: {{regions: [{region}]}}}}\n"
+    )
+    path = tmp_path / "m.yaml"
+    path.write_text(text)
+    with pytest.raises(ModelFileError) as info:
+        load_model(path)
+    said = str(info.value)
+    assert "stabilisation.stages[1].remove" in said
+    assert "removes only rock that stage 0 already excavated" in said

@@ -284,9 +284,25 @@ def _check_stabilisation(model, cfg: ModelFile, source: str, nodes: Any) -> None
     current = model
     for i, stage in enumerate(spec.stages):
         loc = ("stabilisation", "stages", i, "remove")
-        current = attempt(
-            loc, lambda s=stage, m=current: held(_edit.apply_removal(m, **removal(s.remove)))
-        )
+
+        def staged(s=stage, m=current, i=i):
+            try:
+                return held(_edit.apply_removal(m, **removal(s.remove)))
+            except InputError as exc:
+                if i == 0 or "does not overlap" not in exc.problem:
+                    raise
+                try:  # each stage removes from what the stages before it left
+                    _edit.apply_removal(model, **removal(s.remove))
+                except InputError:
+                    raise exc from None
+                earlier = "stage 0" if i == 1 else f"stages 0 to {i - 1}"
+                raise InputError(
+                    exc.where,
+                    f"removes only rock that {earlier} already excavated",
+                    f"remove rock still there after {earlier}, or drop the stage",
+                ) from None
+
+        current = attempt(loc, staged)
     if spec.berm is not None:
         attempt(
             ("stabilisation", "berm"),
