@@ -467,10 +467,7 @@ def test_unit_weights_that_do_not_fit_the_units_are_warned(tmp_path, change, fra
     """Found by fuzzing: water 1.0 (the t/m^3 value) in a kN model read FS
     1.3933 instead of 1.1072, and rock 2.5 in a kN model 1.42 instead of 1.196,
     without a word, though `units` names the system."""
-    import warnings
 
-    from rockdem.config import load_model
-    from rockdem.errors import ModelWarning
 
     text = (
         "units: kN, m, kPa\n"
@@ -481,14 +478,9 @@ def test_unit_weights_that_do_not_fit_the_units_are_warned(tmp_path, change, fra
         "  - {material: rock, vertices: [[0, 0], [2, 0], [2, 1], [0, 1]]}\n"
         "loads: {water_unit_weight: 9.81, water_table: [[-5, -0.5], [5, -0.5]]}\n"
     )
-    path = tmp_path / "m.yaml"
 
     def issued(model_text: str) -> list[str]:
-        path.write_text(model_text)
-        with warnings.catch_warnings(record=True) as caught:
-            warnings.simplefilter("always", ModelWarning)
-            load_model(path)
-        return [str(w.message) for w in caught if issubclass(w.category, ModelWarning)]
+        return _model_warnings(tmp_path / "m.yaml", model_text)
 
     assert issued(text) == []  # consistent: no warning
     # rock at the band's edge converted to other units (5 t/m^3 = 312.14
@@ -534,22 +526,28 @@ def test_pore_pressure_ratio_errors_name_the_key_and_line(tmp_path):
 def test_seismic_load_with_gravity_off_is_warned(tmp_path):
     """Found by fuzzing: `gravity: false` with kh 0.3 pushes the blocks
     sideways by 0.3 W with no weight holding them, silently."""
-    import warnings
 
-    from rockdem.config import load_model
-    from rockdem.errors import ModelWarning
     from rockdem.examples import example_path
 
     text = example_path("bedded-slope").read_text()
-    path = tmp_path / "m.yaml"
 
     def issued(model_text: str) -> list[str]:
-        path.write_text(model_text)
-        with warnings.catch_warnings(record=True) as caught:
-            warnings.simplefilter("always", ModelWarning)
-            load_model(path)
-        return [str(w.message) for w in caught if issubclass(w.category, ModelWarning)]
+        return _model_warnings(tmp_path / "m.yaml", model_text)
 
     assert issued(text.replace("seismic_h: 0.0", "seismic_h: 0.1")) == []
     said = issued(text.replace("seismic_h: 0.0", "seismic_h: 0.1\n  gravity: false"))
     assert len(said) == 1 and "loads.seismic_h with gravity off" in said[0], said
+
+
+def _model_warnings(path, text: str) -> list[str]:
+    """The ModelWarnings that loading ``text`` (written to ``path``) issues."""
+    import warnings
+
+    from rockdem.config import load_model
+    from rockdem.errors import ModelWarning
+
+    path.write_text(text)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", ModelWarning)
+        load_model(path)
+    return [str(w.message) for w in caught if issubclass(w.category, ModelWarning)]
