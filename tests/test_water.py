@@ -327,3 +327,8 @@ def test_plane_failure_with_crack_water_ductile_and_brittle(tmp_path):
     assert brittle.value == pytest.approx(1.1135, rel=0.005) and brittle.value < exact
     assert brittle.proof == "dynamic-relaxation", brittle.failed_analysis.evidence
     assert "shed their strength" in brittle.failed_analysis.evidence.relaxation
+    # the result says that a brittle limit depends on the spring points
+    from rockdem.result_tables import fos_summary
+
+    said = {res: " ".join(fos_summary(f)["warnings"]) for res, f in factors.items()}
+    assert "brittle joints" in said["0"] and "brittle joints" not in said["null"]

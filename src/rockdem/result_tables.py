@@ -42,7 +42,7 @@ from .mechanism import slip_polylines
 from .modes import MODES, boundary_contacts, failure_modes
 from .results import CURRENT_NAMES
 from .spring_law import STATE_NAMES
-from .trust import toppling_caution, trust_statements
+from .trust import cohesion_lost_in_shear, toppling_caution, trust_statements
 
 __all__ = [
     "analysis_summary",
@@ -365,7 +365,8 @@ def fos_summary(fos) -> dict[str, Any]:
     """
     failed, base = fos.failed_analysis, fos.stable_analysis
     mechanism = mechanism_summary(failed)
-    mechanism["warnings"] = [*toppling_caution(fos), *mechanism["warnings"]]
+    brittle = cohesion_lost_in_shear(base) if base is not None and fos.value is not None else []
+    mechanism["warnings"] = [*toppling_caution(fos), *brittle, *mechanism["warnings"]]
     return jsonable(
         {
             "factor_of_safety": fos.value,
