@@ -551,3 +551,17 @@ def _model_warnings(path, text: str) -> list[str]:
         warnings.simplefilter("always", ModelWarning)
         load_model(path)
     return [str(w.message) for w in caught if issubclass(w.category, ModelWarning)]
+
+
+def test_joint_lines_of_two_joints_on_each_other_are_warned(tmp_path):
+    """Found by fuzzing: two joint sets with the same dip, spacing and origin
+    were taken silently, every joint line doubled, each contact along them
+    given one of the two joints."""
+    from rockdem.examples import example_path
+
+    text = example_path("bedded-slope").read_text()
+    assert not any("lie on each other" in w for w in _model_warnings(tmp_path / "m.yaml", text))
+    cross = "cross: {dip: 120, spacing: 3.0, origin: [0.5, 0]}"
+    twice = text.replace(cross, "cross: {dip: 30, spacing: 2.5}")
+    said = _model_warnings(tmp_path / "m.yaml", twice)
+    assert len(said) == 1 and "joint lines of 'bedding' and 'cross' lie on each other" in said[0]

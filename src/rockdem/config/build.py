@@ -15,6 +15,7 @@ from ..geometry.size import MAX_BLOCKS, memory_for
 from ..interfaces import check_held
 from .diagnose import (
     _from_engine,
+    _warn_coincident_joint_lines,
     _warn_loose_tolerance,
     _warn_seismic_without_gravity,
     _warn_unit_weights,
@@ -199,6 +200,7 @@ def build_model(
         _warn_unused_lines(system, cfg, own_lines, source, nodes)
         _warn_unit_weights(model, cfg, source, nodes)
         _warn_seismic_without_gravity(model, source, nodes)
+        _warn_coincident_joint_lines(model, source)
     except ModelFileError:
         raise
     except InputError as exc:

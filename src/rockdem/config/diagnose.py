@@ -115,6 +115,43 @@ def _warn_seismic_without_gravity(model, source: str, nodes: Any) -> None:
     )
 
 
+def _warn_coincident_joint_lines(model, source: str) -> None:
+    """Joint lines of two different joints lying on each other (found by
+    fuzzing: two joint sets with the same dip, spacing and origin, every
+    line doubled): a contact along them takes one of the two joints, which
+    the file does not say."""
+    import numpy as np
+    import shapely
+
+    lines = model.joint_lines
+    if lines is None or len(lines) < 2:
+        return
+    which = np.asarray([model.joint_index(j) for j in model.line_joint])
+    tol = model.blocks.tolerance
+    geoms = shapely.linestrings(lines)
+    i, j = shapely.STRtree(geoms).query(geoms, predicate="dwithin", distance=tol)
+    keep = (i < j) & (which[i] != which[j])
+    i, j = i[keep], j[keep]
+    d = lines[:, 1] - lines[:, 0]
+    d = d / np.maximum(np.hypot(*d.T), 1e-300)[:, None]
+    parallel = np.abs(d[i, 0] * d[j, 1] - d[i, 1] * d[j, 0]) < 1e-9
+    i, j = i[parallel], j[parallel]
+    if not len(i):
+        return
+    shared = shapely.length(shapely.intersection(geoms[i], shapely.buffer(geoms[j], tol)))
+    hit = np.flatnonzero(shared > 10 * tol)
+    if not hit.size:
+        return
+    k = hit[0]
+    a, b = model.joints[which[i[k]]].name, model.joints[which[j[k]]].name
+    _warn(
+        f"{source}: joint lines of {a!r} and {b!r} lie on each other ({hit.size} pair(s), "
+        f"for example over {shared[k]:.3g} from ({lines[i[k], 0, 0]:g}, {lines[i[k], 0, 1]:g})):"
+        " a contact there takes one of the two joints; remove one of them, or move one "
+        "joint set's origin"
+    )
+
+
 def _warn(text: str) -> None:
     """Issue a :class:`ModelWarning` (at the caller of ``load_model``)."""
     warnings.warn(ModelWarning(text), stacklevel=5)
