@@ -310,7 +310,8 @@ def test_an_unstable_stage_names_the_joints_giving_way():
     stage reported "joints failed 0": its state is not committed, and the
     count was of failures carried onto interfaces the cut made anew.  Now a
     stable stage counts the joints whose springs first failed in it, an
-    unstable one those sliding or open as equilibrium was lost."""
+    unstable one those of the moving blocks sliding or open as equilibrium
+    was lost."""
     from rockdem.config import load_model
     from rockdem.examples import example_path
 
@@ -319,8 +320,12 @@ def test_an_unstable_stage_names_the_joints_giving_way():
     ex = excavate_in_stages(model, [vertical])
     before, cut = ex.stages
     assert before.stable and not cut.stable
-    now = cut.analysis.interfaces.current_name[cut.new_failures]
+    faces = cut.analysis.interfaces
+    now = faces.current_name[cut.new_failures]
     assert len(cut.new_failures) > 0 and set(now) <= {"sliding", "open"}
+    moving = set(cut.analysis.unstable_blocks.tolist())  # the mechanism's joints only
+    for i in cut.new_failures:
+        assert {int(faces.block_a[i]), int(faces.block_b[i])} & moving, i
     rows = [r for r in ex.failures_by_stage() if r["stage"] == 1]
     assert len(rows) == len(cut.new_failures)
     assert {r["state"] for r in rows} <= {"sliding", "open"}

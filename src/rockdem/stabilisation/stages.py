@@ -53,8 +53,9 @@ class StageResult:
     new_failures : ndarray of int
         Interfaces (positions in ``analysis``) that failed during this stage:
         with a spring point whose first failure is this stage; for an
-        unstable stage (no state committed), those sliding or open as
-        equilibrium was lost (the joints giving way, failed before or not).
+        unstable stage (no state committed), those of the moving blocks
+        sliding or open as equilibrium was lost (the joints giving way,
+        failed before or not).
     removed_area : float
         Area removed by this stage.
     """
@@ -106,7 +107,12 @@ def _failed_in_stage(a, step: int) -> np.ndarray:
     if a.stable:
         fresh = a.state.first_failure == step
         return np.unique(a.system.springs.interface[fresh]).astype(np.int64)
-    return np.flatnonzero(faces.current >= CURRENT_NAMES.index("sliding")).astype(np.int64)
+    giving = faces.current >= CURRENT_NAMES.index("sliding")
+    moving = a.unstable  # on the mechanism's blocks (not a contact far from it)
+    if moving.any():
+        system = a.system
+        giving &= moving[system.interfaces.block_a] | moving[system.interfaces.block_b]
+    return np.flatnonzero(giving).astype(np.int64)
 
 
 def _keys(system: System) -> dict:
