@@ -24,7 +24,7 @@ from .linalg import norm
 from .mechanism import held_blocks, newton_mechanism, relaxation_mechanism, slip_surface
 from .model import MAX_LOAD_STEPS, Model, check_count
 from .relaxation import TOLERANCE as RELAXATION_TOLERANCE
-from .relaxation import confirm_failed_analysis, with_relaxation
+from .relaxation import confirm_failed_analysis
 from .results import Analysis, Evidence, Step, tabulate
 from .solver import KINKED, Solve, System, build_system, newton, residual
 from .spring_law import SpringState, commit
@@ -375,39 +375,19 @@ def analyse(
                 return replace(
                     _limit_contacts(system, failed, state, q, lam_prev), unloaded_limit=limit
                 )
-            checked, run = confirm_failed_analysis(system, failed, state, q, lam)
-            relaxed_from, said = state, []
-            rescued = None
-            for _ in range(RESCUES):
-                if run.status != "equilibrium" or checked.evidence.certified:
-                    break
-                # Newton stalled where the second method found equilibrium: a
-                # stall, not a verdict; go on from there
-                rescued, new_state = _from_relaxed(
-                    system, relaxed_from, run.q, lam, strength_factor, k
-                )
+            failed, run = confirm_failed_analysis(system, failed, state, q, lam)
+            if run.status == "equilibrium" and not failed.evidence.certified:
+                # Newton stalled where the second method found equilibrium (its
+                # failures committed, see rockdem.relaxation): a stall, not a
+                # verdict; go on from there
+                rescued, new_state = _from_relaxed(system, state, run.q, lam, strength_factor, k)
                 if rescued.converged:
-                    break
-                # the joints that failed in that equilibrium shed their strength
-                # (brittle cohesion) and it was lost: relax again from there
-                said.append(
-                    f"{run} at load factor {lam:.4g}, lost when the joints that "
-                    "failed in it shed their strength"
-                )
-                relaxed_from = new_state
-                checked, run = confirm_failed_analysis(system, failed, new_state, run.q, lam)
-            text = checked.evidence.relaxation
-            if said:  # the last run decides; the ones before it say how it got there
-                text = f"{text}; before it, " + "; then ".join(said)
-            if rescued is not None and rescued.converged:
-                ev = replace(_evidence(rescued), relaxation=text)
-                n_failed = int((new_state.yielded | new_state.broken).sum())
-                steps[-1] = Step(k, lam, strength_factor, True, ev, n_failed)
-                sol, state, q, lam_prev = rescued, new_state, rescued.q, lam
-                continue
-            if said:
-                checked = with_relaxation(checked, text, checked.evidence.confirmed_at)
-            failed = relaxation_mechanism(system, checked, run)
+                    ev = replace(_evidence(rescued), relaxation=failed.evidence.relaxation)
+                    n_failed = int((new_state.yielded | new_state.broken).sum())
+                    steps[-1] = Step(k, lam, strength_factor, True, ev, n_failed)
+                    sol, state, q, lam_prev = rescued, new_state, rescued.q, lam
+                    continue
+            failed = relaxation_mechanism(system, failed, run)
             return replace(
                 _limit_contacts(system, failed, state, q, lam_prev), unloaded_limit=limit
             )
@@ -417,10 +397,6 @@ def analyse(
         warnings.warn(ModelWarning(text), stacklevel=2)
     return done
 
-
-#: rounds of (dynamic relaxation's equilibrium -> committed -> lost again as the
-#: joints that failed in it shed their strength) before a load step is undecided
-RESCUES = 3
 
 #: an equilibrium in which a joint opens or slides by more than this share of
 #: the mean block size, or a block turns more than this many radians, is

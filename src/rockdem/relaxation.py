@@ -337,11 +337,18 @@ def confirm_failed_analysis(system, failed, state, q, load_factor: float):
     statement goes into its evidence.  Returns ``(analysis, run)``; the
     run's late motion is the mechanism (also where the LP proved failure)."""
     proven = bool(failed.evidence.certified)
+    factor = failed.strength_factor
+    run = _run(system, state, load_factor, factor, q, MAX_STEPS, not proven)
+    run, shed = _shedding(system, state, load_factor, factor, run, MAX_STEPS, not proven)
+    return with_relaxation(failed, f"{run} at load factor {load_factor:.4g}{shed}"), run
+
+
+def _run(system, state, load_factor, factor, q, steps, look):
+    """A run from ``q`` in segments of ``steps``, gone on while undecided."""
     run = relax(
-        system, state, load_factor, failed.strength_factor, q, extend=True, second_look=not proven
+        system, state, load_factor, factor, q, max_steps=steps, extend=True, second_look=look
     )
-    run = _go_on(system, state, load_factor, failed.strength_factor, run, MAX_STEPS, not proven)
-    return with_relaxation(failed, f"{run} at load factor {load_factor:.4g}"), run
+    return _go_on(system, state, load_factor, factor, run, steps, look)
 
 
 def _go_on(system, state, load_factor, factor, run, steps, look):
@@ -446,20 +453,11 @@ def _shedding(system, state, load_factor, factor, run, steps, look):
         ):
             break  # nothing shed: the equilibrium stands
         state, rounds = after, rounds + 1
-        run = relax(
-            system,
-            state,
-            load_factor,
-            factor,
-            run.q,
-            max_steps=steps,
-            extend=True,
-            second_look=look,
-        )
-        run = _go_on(system, state, load_factor, factor, run, steps, look)
+        run = _run(system, state, load_factor, factor, run.q, steps, look)
     lost = "an equilibrium" if rounds == 1 else f"{rounds} equilibria"
-    note = f" (after {lost} lost as the joints failing in it shed their strength)" if rounds else ""
-    return run, note
+    if not rounds:
+        return run, ""
+    return run, f" (after {lost} lost as the joints failing in each shed their strength)"
 
 
 def with_relaxation(failed, text: str, confirmed_at: float | None = None):
