@@ -413,3 +413,54 @@ def test_a_bolt_out_of_the_rock_or_headed_inside_it_is_refused(bolt, words):
     # a bolt from the top through both joints into the ground is taken
     down = _stack(Bolt(head=(2, 4), angle=270, length=5.0, capacity=100.0, axial_stiffness=1e5))
     assert rd.factor_of_safety(down).value is not None
+
+
+def test_a_bolt_shortened_by_the_sliding_is_reported_in_compression():
+    """A bolt pointing down-dip (the flipped bolt of the cable test) is
+    shortened as the block slides: its force is compression, reported with
+    its magnitude and the word, not as the "largest" of signed forces (a
+    compression at capacity read as the largest force -99 kN)."""
+    from rockdem.result_tables import bolt_summary
+
+    model = block_with_bolt(30.0)
+    b = model.bolts[0]
+    R = V._rot(-PSI)
+    t = np.radians(30.0)
+    head = R @ np.array([WIDTH / 2 - HEIGHT * np.cos(t) / np.sin(t), HEIGHT])
+    flipped = Bolt(**{**b.__dict__, "head": tuple(head), "angle": -30.0 - PSI})
+    fos = rd.factor_of_safety(model.replace(bolts=[flipped]))
+    (row,) = bolt_summary(fos.stable_analysis)
+    assert row["max_axial_force"] < -0.5 * b.capacity  # near its capacity, pushing
+    # of a bolt's crossings, the force of largest magnitude, with its sign
+    from types import SimpleNamespace
+
+    crossings = SimpleNamespace(
+        name=np.array(["B", "B"]),
+        axial_force=np.array([3.0, -29.0]),
+        utilisation=np.array([0.1, 0.97]),
+        yielded=np.array([False, False]),
+        first_yield=np.array([-1, -1]),
+    )
+    (row,) = bolt_summary(SimpleNamespace(bolts=crossings))
+    assert row["max_axial_force"] == -29.0 and row["max_utilisation"] == 0.97
+
+
+def test_the_bolt_line_says_tension_or_compression(capsys):
+    from rockdem.cli.analyses import _print_bolts
+
+    doc = {
+        "unit_system": {"force": "kN"},
+        "bolt_summary": [
+            dict(bolt="P", crossings=2, max_axial_force=-99.28, max_utilisation=0.99,
+                 yielded_crossings=0, first_yield=None),
+            dict(bolt="T", crossings=1, max_axial_force=12.5, max_utilisation=0.125,
+                 yielded_crossings=0, first_yield=None),
+            dict(bolt="Z", crossings=1, max_axial_force=0.0, max_utilisation=0.0,
+                 yielded_crossings=0, first_yield=None),
+        ],
+    }  # fmt: skip
+    _print_bolts(doc, "bolt_summary", "bolts")
+    said = capsys.readouterr().out
+    assert "P: crosses 2 joints, largest axial force 99.28 kN compression (99% of capacity)" in said
+    assert "T: crosses 1 joint, largest axial force 12.5 kN tension (12% of capacity)" in said
+    assert "Z: crosses 1 joint, no axial force (0% of capacity)" in said

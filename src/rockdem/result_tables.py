@@ -230,9 +230,11 @@ def _failed(analysis) -> list[dict[str, Any]]:
 
 
 def bolt_summary(analysis) -> list[dict[str, Any]]:
-    """Per bolt: the joints it crosses, its largest axial force (per bolt), the
-    largest utilisation, how many of its crossings have yielded, and the
-    stage of its first yield (None: never)."""
+    """Per bolt: the joints it crosses, its axial force of largest magnitude
+    (per bolt, signed: tension positive; a bolt's largest tension would hide
+    a compression at capacity at another crossing), the largest utilisation,
+    how many of its crossings have yielded, and the stage of its first yield
+    (None: never)."""
     if analysis is None or analysis.bolts is None:
         return []
     r = analysis.bolts
@@ -240,11 +242,12 @@ def bolt_summary(analysis) -> list[dict[str, Any]]:
     for name in dict.fromkeys(r.name):
         k = r.name == name
         first = r.first_yield[k][r.first_yield[k] >= 0]
+        axial = r.axial_force[k]
         out.append(
             {
                 "bolt": str(name),
                 "crossings": int(k.sum()),
-                "max_axial_force": float(np.max(r.axial_force[k])),
+                "max_axial_force": float(axial[np.argmax(np.abs(axial))]),
                 "max_utilisation": float(np.max(r.utilisation[k])),
                 "yielded_crossings": int(r.yielded[k].sum()),
                 "first_yield": int(first.min()) if first.size else None,

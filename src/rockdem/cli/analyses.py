@@ -259,10 +259,12 @@ def _print_bolts(doc: dict[str, Any], key: str, title: str) -> None:
         state = f", yielded at {_plural(yielded, 'joint')}" if yielded else ""
         if b.get("first_yield") is not None:
             state += f" (first at stage {b['first_yield']})"
+        force = b["max_axial_force"]
+        sense = "tension" if force > 0 else "compression"
+        axial = f"largest axial force {abs(force):.4g}{unit} {sense}" if force else "no axial force"
         out.print(
-            f"  {escape(b['bolt'])}: crosses {_plural(b['crossings'], 'joint')}, largest axial "
-            f"force {b['max_axial_force']:.4g}{unit} ({100 * b['max_utilisation']:.0f}% of capacity"
-            f"{state})"
+            f"  {escape(b['bolt'])}: crosses {_plural(b['crossings'], 'joint')}, {axial} "
+            f"({100 * b['max_utilisation']:.0f}% of capacity{state})"
         )
 
 
