@@ -42,7 +42,11 @@ def run(n_target: int, kind: str, runs: int) -> tuple[float, int]:
     times, n = [], 0
     for _ in range(runs):
         t0 = time.perf_counter()
-        g = generate_slope(profile, sets, depth=depth, bridge_joint=BRIDGE, ground_joint=GROUND)
+        # (no size limit: the 100,000 target is estimated just above the
+        # default guard of rockdem.geometry.size.MAX_BLOCKS)
+        g = generate_slope(
+            profile, sets, depth=depth, bridge_joint=BRIDGE, ground_joint=GROUND, max_blocks=None
+        )
         times.append(time.perf_counter() - t0)
         n = g.blocks.n_blocks
     return statistics.median(times), n
