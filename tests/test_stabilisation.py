@@ -378,3 +378,49 @@ def test_a_stage_removing_only_rock_already_excavated_says_so(tmp_path):
     said = str(info.value)
     assert "stabilisation.stages[1].remove" in said
     assert "removes only rock that stage 0 already excavated" in said
+
+
+# ------------------------------------------------- bolts through removals
+def _two_blocks_and_a_yielding_bolt():
+    """Two blocks on a 20 degree plane (phi 35: stable); a soft-capacity bolt
+    through block 1 into the ground yields under the blocks' settlement."""
+    from rockdem import verification as V
+    from rockdem.bolts import Bolt
+
+    R = V._rot(-20)
+    ground = np.array([(-8, -1), (12, -1), (12, 0), (-8, 0)]) @ R.T
+    b1 = np.array([(0, 0), (2, 0), (2, 1), (0, 1)]) @ R.T
+    b2 = np.array([(3, 0), (5, 0), (5, 1), (3, 1)]) @ R.T
+    blocks = rd.Blocks.from_polygons([ground, b1, b2], fixed=[True, False, False], unit_weight=25)
+    bolts = [
+        Bolt(head=tuple(R @ np.array([1.0, 1.0])), angle=-90, length=2.0, capacity=0.01,
+             axial_stiffness=1e4, shear_stiffness=1e4, shear_capacity=0.01, name="in 1"),
+        Bolt(head=tuple(R @ np.array([4.0, 1.0])), angle=-90, length=2.0, capacity=50,
+             axial_stiffness=1e4, name="in 2"),
+    ]  # fmt: skip
+    joint = rd.Joint(normal_stiffness=1e6, friction_angle=35)
+    return rd.Model(blocks, joint, bolts=bolts)
+
+
+def test_excavation_keeps_the_bolts_left_in_the_rock_and_their_yield_history():
+    """Removing rock once dropped every bolt of the model, silently (a bolted
+    slope's stages and removal trials were analysed unbolted): a stage keeps
+    the bolts whose head and joints are still in the rock, with the load step
+    at which each crossing first yielded, and warns of those it removes."""
+    model = _two_blocks_and_a_yielding_bolt()
+    with pytest.warns(rd.ModelWarning, match=r"stage 1 \(cut\) removes 1 bolt .*\(in 2\)"):
+        ex = excavate_in_stages(model, [Stage("cut", blocks=(2,))])
+    before, after = ex.stages[0].analysis, ex.stages[1].analysis
+    assert [b.name for b in ex.stages[1].model.bolts] == ["in 1"]
+    assert before.bolts.first_yield.tolist() == [1, -1]  # yielded in load step 1
+    assert after.stable and after.bolts.first_yield.tolist() == [1]  # still from step 1
+
+
+def test_a_removal_trial_keeps_the_bolts():
+    """The bolted example's removal design: with its bolts kept, removing the
+    three crest blocks above the top row (the planar slide the bolts do not
+    reach) meets the target; analysed unbolted it took 20 blocks."""
+    model, _ = load_model(example_path("bolted-slope"))
+    s = stabilise(model, 1.3)
+    assert s.reached and sorted(s.final.removed_blocks) == [40, 45, 50]
+    assert len(s.final.model.bolts) == 4

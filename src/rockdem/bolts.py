@@ -245,6 +245,70 @@ def check_bolt_stiffness(bolts, crossings, faces, joints, length_scale: float) -
         )
 
 
+def _crossed(bolt, where: str, blocks, faces, tree):
+    """The interfaces ``bolt`` crosses with rock on both sides and a free
+    block on one (indices, by depth) and every interface's parameter along
+    the bolt; InputError where its head is not on the rock's face or it
+    crosses no such interface."""
+    tol = blocks.tolerance
+    P0, P1 = faces.start, faces.end
+    e = bolt.direction
+    head = np.asarray(bolt.head)
+    # the head may sit a little off the face (rounded coordinates): 1% of the
+    # length, and of the model's size for a bolt longer than the model
+    reach = HEAD_REACH * min(bolt.length, blocks.extent)
+    probe = shapely.points(head + max(10 * tol, reach) * e)
+    if not len(tree.query(probe, predicate="intersects")):
+        raise InputError(
+            where,
+            f"the head ({head[0]:g}, {head[1]:g}) is not on the rock in the bolt's direction",
+            "put the head on the face and point the bolt into the rock",
+        )
+    behind = shapely.points(head - max(10 * tol, reach) * e)
+    if len(tree.query(behind, predicate="within")):  # (found by fuzzing: 2 m in)
+        raise InputError(
+            where,
+            f"the head ({head[0]:g}, {head[1]:g}) is inside the rock, not on its face",
+            "put the head on the face (the bolt is drilled from the free surface)",
+        )
+    r = bolt.length * e
+    s = P1 - P0
+    qp = P0 - head
+    denom = r[0] * s[:, 1] - r[1] * s[:, 0]
+    ok = np.abs(denom) > 1e-12 * bolt.length * np.hypot(*s.T)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = (qp[:, 0] * s[:, 1] - qp[:, 1] * s[:, 0]) / denom
+        u = (qp[:, 0] * r[1] - qp[:, 1] * r[0]) / denom
+    eps_t, eps_u = tol / bolt.length, tol / np.maximum(np.hypot(*s.T), tol)
+    hit = ok & (t > eps_t) & (t < 1 - eps_t) & (u >= -eps_u) & (u <= 1 + eps_u)
+    hit = np.flatnonzero(hit)
+    # a crossing through a corner touches several interfaces: keep one per depth
+    hit = hit[np.argsort(t[hit], kind="stable")]
+    keep = np.ones(len(hit), dtype=bool)
+    keep[1:] = np.diff(t[hit]) * bolt.length > tol
+    hit = hit[keep]
+    free = ~(blocks.fixed[faces.block_a[hit]] & blocks.fixed[faces.block_b[hit]])
+    hit = hit[free]
+    # rock on both sides: a bolt that leaves the rock through a corner of
+    # an interface, or runs along a free face, crosses nothing there
+    # (found by fuzzing: one out through a corner into the air held the
+    # block above as if anchored, FS 2.797 for 1.213)
+    step = max(10 * tol, 1e-6 * min(bolt.length, blocks.extent))
+    sides = [
+        shapely.points(head + (t[hit, None] * bolt.length + sign * step) * e)
+        for sign in (-1.0, 1.0)
+    ]
+    in_rock = [np.isin(np.arange(len(hit)), tree.query(pt, predicate="within")[0]) for pt in sides]
+    hit = hit[in_rock[0] & in_rock[1]]
+    if not len(hit):
+        raise InputError(
+            where,
+            "crosses no joint between a free block and another block",
+            "lengthen it or change its angle so that it ties the moving rock to stable rock",
+        )
+    return hit, t
+
+
 def place_bolts(bolts, blocks, faces, asm):
     """The crossings of every bolt with the interfaces (None without bolts).
 
@@ -254,10 +318,7 @@ def place_bolts(bolts, blocks, faces, asm):
     if not bolts:
         return None
     dof, scatter, n_nnz, n_dof = asm.dof, asm.scatter, asm.nnz, asm.n_dof
-    polys = blocks.polygons()
-    tree = shapely.STRtree(polys)
-    tol = blocks.tolerance
-    P0, P1 = faces.start, faces.end
+    tree = shapely.STRtree(blocks.polygons())
     rows: list[tuple] = []
     names = []
     for i, bolt in enumerate(bolts):
@@ -277,60 +338,7 @@ def place_bolts(bolts, blocks, faces, asm):
             )
         e = bolt.direction
         head = np.asarray(bolt.head)
-        # the head may sit a little off the face (rounded coordinates): 1% of the
-        # length, and of the model's size for a bolt longer than the model
-        reach = HEAD_REACH * min(bolt.length, blocks.extent)
-        probe = shapely.points(head + max(10 * tol, reach) * e)
-        if not len(tree.query(probe, predicate="intersects")):
-            raise InputError(
-                where,
-                f"the head ({head[0]:g}, {head[1]:g}) is not on the rock in the bolt's direction",
-                "put the head on the face and point the bolt into the rock",
-            )
-        behind = shapely.points(head - max(10 * tol, reach) * e)
-        if len(tree.query(behind, predicate="within")):  # (found by fuzzing: 2 m in)
-            raise InputError(
-                where,
-                f"the head ({head[0]:g}, {head[1]:g}) is inside the rock, not on its face",
-                "put the head on the face (the bolt is drilled from the free surface)",
-            )
-        r = bolt.length * e
-        s = P1 - P0
-        qp = P0 - head
-        denom = r[0] * s[:, 1] - r[1] * s[:, 0]
-        ok = np.abs(denom) > 1e-12 * bolt.length * np.hypot(*s.T)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            t = (qp[:, 0] * s[:, 1] - qp[:, 1] * s[:, 0]) / denom
-            u = (qp[:, 0] * r[1] - qp[:, 1] * r[0]) / denom
-        eps_t, eps_u = tol / bolt.length, tol / np.maximum(np.hypot(*s.T), tol)
-        hit = ok & (t > eps_t) & (t < 1 - eps_t) & (u >= -eps_u) & (u <= 1 + eps_u)
-        hit = np.flatnonzero(hit)
-        # a crossing through a corner touches several interfaces: keep one per depth
-        hit = hit[np.argsort(t[hit], kind="stable")]
-        keep = np.ones(len(hit), dtype=bool)
-        keep[1:] = np.diff(t[hit]) * bolt.length > tol
-        hit = hit[keep]
-        free = ~(blocks.fixed[faces.block_a[hit]] & blocks.fixed[faces.block_b[hit]])
-        hit = hit[free]
-        # rock on both sides: a bolt that leaves the rock through a corner of
-        # an interface, or runs along a free face, crosses nothing there
-        # (found by fuzzing: one out through a corner into the air held the
-        # block above as if anchored, FS 2.797 for 1.213)
-        step = max(10 * tol, 1e-6 * min(bolt.length, blocks.extent))
-        sides = [
-            shapely.points(head + (t[hit, None] * bolt.length + sign * step) * e)
-            for sign in (-1.0, 1.0)
-        ]
-        in_rock = [
-            np.isin(np.arange(len(hit)), tree.query(pt, predicate="within")[0]) for pt in sides
-        ]
-        hit = hit[in_rock[0] & in_rock[1]]
-        if not len(hit):
-            raise InputError(
-                where,
-                "crosses no joint between a free block and another block",
-                "lengthen it or change its angle so that it ties the moving rock to stable rock",
-            )
+        hit, t = _crossed(bolt, where, blocks, faces, tree)
         for k in hit:
             depth = float(t[k] * bolt.length)
             bond = bolt.bond_strength * (bolt.length - depth)
@@ -397,6 +405,26 @@ def place_bolts(bolts, blocks, faces, asm):
         gather=gather,
         B=B,
     )
+
+
+def bolts_left_in_rock(bolts, blocks, faces) -> tuple[tuple, tuple[str, ...]]:
+    """The bolts that still hold after rock was removed (an excavation stage,
+    a removal trial), and the names of those that went with it: a bolt whose
+    head block was removed, or every joint it tied, holds nothing.  (The
+    removal once dropped every bolt of the model, silently: a bolted slope's
+    excavation stages and removal trials were analysed unbolted.)"""
+    if not bolts:
+        return (), ()
+    tree = shapely.STRtree(blocks.polygons())
+    kept, gone = [], []
+    for i, bolt in enumerate(bolts):
+        try:
+            _crossed(bolt, "bolts", blocks, faces, tree)
+        except InputError:
+            gone.append(bolt.name or f"bolt {i + 1}")
+        else:
+            kept.append(bolt)
+    return tuple(kept), tuple(gone)
 
 
 @dataclass(frozen=True, eq=False, repr=False)

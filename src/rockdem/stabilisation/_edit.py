@@ -13,6 +13,7 @@ import numpy as np
 import shapely
 from shapely.ops import nearest_points
 
+from ..bolts import bolts_left_in_rock
 from ..errors import InputError
 from ..model import Model
 
@@ -36,7 +37,13 @@ def _geometry(model: Model):
 
 
 def _back(model: Model, geom) -> Model:
-    return geom.model(loads=model.loads, settings=model.settings, name=model.name)
+    """The edited geometry as a model with ``model``'s loads, settings, name
+    and the bolts left in the rock (see :func:`rockdem.bolts.bolts_left_in_rock`)."""
+    out = geom.model(loads=model.loads, settings=model.settings, name=model.name)
+    if not model.bolts:
+        return out
+    kept, _ = bolts_left_in_rock(model.bolts, out.blocks, geom.interfaces())
+    return out.replace(bolts=kept)
 
 
 def remove_ids(model: Model, ids: Sequence[int]) -> Model:

@@ -12,12 +12,14 @@ that fail at each stage are reported stage by stage.
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from ..analysis import analyse, analyse_from
+from ..errors import ModelWarning
 from ..model import Model
 from ..results import CURRENT_NAMES, Analysis
 from ..solver import System, build_system
@@ -115,6 +117,27 @@ def _failed_in_stage(a, step: int) -> np.ndarray:
     return np.flatnonzero(giving).astype(np.int64)
 
 
+def _warn_bolts_removed(before: Model, after: Model, where: str) -> None:
+    """A warning naming the bolts that went with the rock a stage removed."""
+    gone = [
+        b.name or f"bolt {i + 1}"
+        for i, b in enumerate(before.bolts)
+        if not any(b is kept for kept in after.bolts)
+    ]
+    if gone:
+        warnings.warn(
+            f"{where} removes {_count(gone, 'bolt')} with its rock ({', '.join(gone)}): "
+            "its head or every joint it tied was in the rock removed; the later stages "
+            "are analysed without it",
+            ModelWarning,
+            stacklevel=3,
+        )
+
+
+def _count(items, word: str) -> str:
+    return f"{len(items)} {word}{'s' if len(items) != 1 else ''}"
+
+
 def _keys(system: System) -> dict:
     faces = system.interfaces
     ids = system.blocks.ids
@@ -142,6 +165,7 @@ def carry_state(old: System, state: SpringState, new: System) -> SpringState:
     slip, yielded = fresh.slip.copy(), fresh.yielded.copy()
     broken, first = fresh.broken.copy(), fresh.first_failure.copy()
     old_keys = _keys(old)
+    matched = {}  # new interface -> old interface
     for key, k in _keys(new).items():
         a, b, x0, y0, x1, y1 = key
         sign, j = 1.0, old_keys.get(key)
@@ -149,6 +173,7 @@ def carry_state(old: System, state: SpringState, new: System) -> SpringState:
             j, sign = old_keys.get((b, a, x1, y1, x0, y0)), -1.0
         if j is None:
             continue
+        matched[k] = j
         src = np.arange(j * m, (j + 1) * m)
         if sign < 0:
             src = src[::-1]
@@ -157,7 +182,31 @@ def carry_state(old: System, state: SpringState, new: System) -> SpringState:
         yielded[dst] = state.yielded[src]
         broken[dst] = state.broken[src]
         first[dst] = state.first_failure[src]
-    return SpringState(slip, yielded, broken, first)
+    return SpringState(slip, yielded, broken, first, _carry_bolt_yield(old, state, new, matched))
+
+
+def _carry_bolt_yield(old: System, state: SpringState, new: System, matched: dict):
+    """The stage at which each bolt crossing of ``new`` first yielded, from the
+    same bolt's crossing of the same interface in ``old`` (-1: never, or a
+    crossing the excavation made new).  (Not carried, a bolt that yielded
+    under gravity was reported yielding first at the excavation stage.)"""
+    if new.bolts is None:
+        return None
+    first = np.full(new.bolts.n, -1)
+    if old.bolts is None or state.bolt_first_yield is None:
+        return first
+    # the same Bolt objects (a removal drops some: positions shift)
+    position = {id(b): k for k, b in enumerate(new.model.bolts)}
+    renumber = [position.get(id(b), -1) for b in old.model.bolts]
+    before = {
+        (renumber[b], int(i)): int(f)
+        for b, i, f in zip(old.bolts.bolt, old.bolts.interface, state.bolt_first_yield, strict=True)
+    }
+    for c, (b, i) in enumerate(zip(new.bolts.bolt, new.bolts.interface, strict=True)):
+        j = matched.get(int(i))
+        if j is not None:
+            first[c] = before.get((int(b), j), -1)
+    return first
 
 
 def _carry_q(old: System, disp: np.ndarray, new: System) -> np.ndarray:
@@ -205,6 +254,7 @@ def excavate_in_stages(model: Model, stages: Sequence[Stage], *,
     for k, st in enumerate(stages, start=1):
         m = _edit.apply_removal(prev.system.model, st.blocks, st.regions, st.profile)
         _, area = _edit.removed_between(prev.system.model, m)
+        _warn_bolts_removed(prev.system.model, m, f"stage {k} ({st.name})")
         sys_k = build_system(m)
         step += 1
         if carry:
