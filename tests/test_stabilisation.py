@@ -424,3 +424,42 @@ def test_a_removal_trial_keeps_the_bolts():
     s = stabilise(model, 1.3)
     assert s.reached and sorted(s.final.removed_blocks) == [40, 45, 50]
     assert len(s.final.model.bolts) == 4
+
+
+def test_loads_go_with_the_rock_they_act_on():
+    """A removal takes the loads on the rock it removes: a point load on the
+    removed block goes, and a trapezoidal line load across two blocks keeps
+    the part on the block left, with the same force on it.  (Found: the
+    automatic removal of a bedded slope's mechanism blocks under a crest
+    surcharge stopped the design with "surcharge: does not lie on block
+    boundaries all along".)"""
+    from rockdem.loads import block_loads
+    from rockdem.model import LineLoad, PointLoad
+    from rockdem.stabilisation import _edit
+
+    ground = [(-2, -1), (6, -1), (6, 0), (-2, 0)]
+    blocks = rd.Blocks.from_polygons(
+        [ground, [(0, 0), (2, 0), (2, 1), (0, 1)], [(2, 0), (4, 0), (4, 1), (2, 1)]],
+        fixed=[True, False, False],
+        unit_weight=20,
+    )
+    loads = rd.Loads(
+        points=(PointLoad(3.0, 1.0, 0.0, -5.0, name="P"),),
+        lines=(LineLoad((0, 1), (4, 1), 0.0, -10.0, name="fill", q_end=(0.0, -30.0)),),
+    )
+    model = rd.Model(blocks, rd.Joint(normal_stiffness=1e6, friction_angle=40), loads=loads)
+    before = block_loads(model.blocks, model.loads)
+    with pytest.warns(rd.ModelWarning, match=r"stage 1 \(cut\): P removed with its rock; "
+                      r"fill cut to the 50% of its length still on the rock"):  # fmt: skip
+        ex = excavate_in_stages(model, [Stage("cut", blocks=(2,))])
+    after = ex.stages[1].model
+    assert after.loads.points == ()
+    (fill,) = after.loads.lines
+    assert fill.start == (0.0, 1.0) and fill.end == pytest.approx((2.0, 1.0))
+    assert (fill.qy, fill.q_end[1]) == pytest.approx((-10.0, -20.0))
+    kept = block_loads(after.blocks, after.loads)
+    assert kept[after.blocks.index_of([1])] == pytest.approx(before[model.blocks.index_of([1])])
+    # nothing removed under a load: it stays as it was
+    on_1 = LineLoad((0, 1), (2, 1), 0.0, -10.0, name="on 1")
+    untouched = _edit.remove_ids(model.replace(loads=rd.Loads(lines=(on_1,))), [2])
+    assert untouched.loads.lines == (on_1,)

@@ -395,3 +395,84 @@ def check_water_unit_weight(blocks: Blocks, loads: Loads) -> None:
             "give water and rock in the same units (water: 9.81 kN/m^3, 1 t/m^3, "
             "0.00981 MN/m^3, 62.4 lbf/ft^3)",
         )
+
+
+def loads_left_on_rock(blocks: Blocks, loads: Loads) -> tuple[Loads, tuple[str, ...]]:
+    """The point and line loads after rock was removed (an excavation stage,
+    a removal trial, a berm cut), and what happened to those that changed.
+
+    A load acts on the rock beneath it, so it goes with that rock: a point
+    load that no longer pushes into a block is dropped, a line load keeps
+    the parts of its length that still push into the rock (each part with
+    its own share of a varying traction).  (Found: the automatic removal of
+    a bedded slope's mechanism blocks under a crest surcharge stopped the
+    design with "surcharge: does not lie on block boundaries all along".)
+    """
+    if not loads.points and not loads.lines:
+        return loads, ()
+    polys = blocks.polygons()
+    tree = shapely.STRtree(polys)
+    step = 10 * blocks.tolerance
+    notes: list[str] = []
+    points = []
+    for i, p in enumerate(loads.points):
+        force = np.array([p.fx, p.fy], dtype=float)
+        unit = force / max(float(np.hypot(*force)), 1e-300)
+        probe = shapely.points(np.array([p.x, p.y]) + step * unit)
+        if len(tree.query(probe, predicate="intersects")):
+            points.append(p)
+        else:
+            notes.append(f"{p.name or f'point load {i}'} removed with its rock")
+    lines = []
+    for i, line in enumerate(loads.lines):
+        parts = _parts_on_rock(polys, tree, line, step, blocks.tolerance)
+        name = line.name or f"line load {i}"
+        if parts == [(0.0, 1.0)]:
+            lines.append(line)
+            continue
+        if not parts:
+            notes.append(f"{name} removed with its rock")
+            continue
+        p0, p1 = np.asarray(line.start, float), np.asarray(line.end, float)
+        for t0, t1 in parts:
+            q0, q1 = line.traction(np.array([t0, t1]))
+            lines.append(
+                replace(
+                    line,
+                    start=tuple(p0 + t0 * (p1 - p0)),
+                    end=tuple(p0 + t1 * (p1 - p0)),
+                    qx=float(q0[0]),
+                    qy=float(q0[1]),
+                    q_end=None if line.q_end is None else (float(q1[0]), float(q1[1])),
+                )
+            )
+        kept = sum(t1 - t0 for t0, t1 in parts)
+        notes.append(f"{name} cut to the {kept:.0%} of its length still on the rock")
+    return replace(loads, points=tuple(points), lines=tuple(lines)), tuple(notes)
+
+
+def _parts_on_rock(polys, tree, line, step: float, tol: float) -> list[tuple[float, float]]:
+    """The fractions ``[(t0, t1), ...]`` of a line load's length that push
+    into a block (merged where they meet; ``[(0, 1)]``: all of it)."""
+    p0, p1 = np.asarray(line.start, float), np.asarray(line.end, float)
+    length = float(np.hypot(*(p1 - p0)))
+    q = line.traction(np.array([0.5]))[0]
+    shift = step * q / max(float(np.hypot(*q)), 1e-300)
+    seg = shapely.LineString([p0 + shift, p1 + shift])
+    pieces = shapely.intersection(polys[tree.query(seg, predicate="intersects")], seg)
+    pieces = shapely.get_parts(pieces)  # (a concave block: in and out again)
+    spans = []
+    for xy in map(shapely.get_coordinates, pieces):
+        if len(xy) < 2:
+            continue
+        t = (xy - shift - p0) @ (p1 - p0) / length**2
+        spans.append((float(np.clip(t.min(), 0, 1)), float(np.clip(t.max(), 0, 1))))
+    merged: list[list[float]] = []
+    for t0, t1 in sorted(spans):
+        if merged and t0 <= merged[-1][1] + tol / length:
+            merged[-1][1] = max(merged[-1][1], t1)
+        elif (t1 - t0) * length > tol:
+            merged.append([t0, t1])
+    if len(merged) == 1 and merged[0][0] * length <= tol and (1 - merged[0][1]) * length <= tol:
+        return [(0.0, 1.0)]
+    return [(t0, t1) for t0, t1 in merged]

@@ -278,6 +278,16 @@ def _check_stabilisation(model, cfg: ModelFile, source: str, nodes: Any) -> None
                 "remove fewer blocks",
             )
         check_held(m.blocks)  # the analysis of the design would find it singular
+        from ..loads import block_loads
+
+        try:  # (found: a stage taking the block a point load acted on failed mid-run)
+            block_loads(m.blocks, m.loads)
+        except InputError as exc:
+            raise InputError(
+                exc.where,
+                f"{exc.problem} once this rock is removed (the load acted on rock it removes)",
+                "move the load onto rock that stays, or take it out of `loads`",
+            ) from None
         return m
 
     for i, trial in enumerate(spec.trials):

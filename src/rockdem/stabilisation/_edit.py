@@ -15,6 +15,7 @@ from shapely.ops import nearest_points
 
 from ..bolts import bolts_left_in_rock
 from ..errors import InputError
+from ..loads import loads_left_on_rock
 from ..model import Model
 
 
@@ -37,9 +38,12 @@ def _geometry(model: Model):
 
 
 def _back(model: Model, geom) -> Model:
-    """The edited geometry as a model with ``model``'s loads, settings, name
-    and the bolts left in the rock (see :func:`rockdem.bolts.bolts_left_in_rock`)."""
-    out = geom.model(loads=model.loads, settings=model.settings, name=model.name)
+    """The edited geometry as a model with ``model``'s settings and name, and
+    its loads and bolts as far as they are left on the rock (see
+    :func:`rockdem.loads.loads_left_on_rock`, :func:`rockdem.bolts.bolts_left_in_rock`)."""
+    out = geom.model(settings=model.settings, name=model.name)
+    loads, _ = loads_left_on_rock(out.blocks, model.loads)
+    out = out.replace(loads=loads)
     if not model.bolts:
         return out
     kept, _ = bolts_left_in_rock(model.bolts, out.blocks, geom.interfaces())

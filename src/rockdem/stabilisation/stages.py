@@ -20,6 +20,7 @@ import numpy as np
 
 from ..analysis import analyse, analyse_from
 from ..errors import ModelWarning
+from ..loads import loads_left_on_rock
 from ..model import Model
 from ..results import CURRENT_NAMES, Analysis
 from ..solver import System, build_system
@@ -117,8 +118,9 @@ def _failed_in_stage(a, step: int) -> np.ndarray:
     return np.flatnonzero(giving).astype(np.int64)
 
 
-def _warn_bolts_removed(before: Model, after: Model, where: str) -> None:
-    """A warning naming the bolts that went with the rock a stage removed."""
+def _warn_removed(before: Model, after: Model, where: str) -> None:
+    """Warnings naming the bolts and loads that went with the rock a stage
+    removed (or the line loads cut to the rock that is left)."""
     gone = [
         b.name or f"bolt {i + 1}"
         for i, b in enumerate(before.bolts)
@@ -132,6 +134,9 @@ def _warn_bolts_removed(before: Model, after: Model, where: str) -> None:
             ModelWarning,
             stacklevel=3,
         )
+    _, notes = loads_left_on_rock(after.blocks, before.loads)
+    if notes:
+        warnings.warn(f"{where}: {'; '.join(notes)}", ModelWarning, stacklevel=3)
 
 
 def _count(items, word: str) -> str:
@@ -254,7 +259,7 @@ def excavate_in_stages(model: Model, stages: Sequence[Stage], *,
     for k, st in enumerate(stages, start=1):
         m = _edit.apply_removal(prev.system.model, st.blocks, st.regions, st.profile)
         _, area = _edit.removed_between(prev.system.model, m)
-        _warn_bolts_removed(prev.system.model, m, f"stage {k} ({st.name})")
+        _warn_removed(prev.system.model, m, f"stage {k} ({st.name})")
         sys_k = build_system(m)
         step += 1
         if carry:
