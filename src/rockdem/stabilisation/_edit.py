@@ -50,6 +50,19 @@ def _back(model: Model, geom) -> Model:
     return out.replace(bolts=kept)
 
 
+def removal_notes(before: Model, after: Model) -> tuple[str, ...]:
+    """What a removal took with the rock besides blocks: the bolts (their
+    head or every joint they tied) and the loads on it (see :func:`_back`)."""
+    gone = [
+        b.name or f"bolt {i + 1}"
+        for i, b in enumerate(before.bolts)
+        if not any(b is kept for kept in after.bolts)
+    ]
+    notes = [f"{name} removed with its rock (its head or every joint it tied)" for name in gone]
+    _, on_loads = loads_left_on_rock(after.blocks, before.loads)
+    return (*notes, *on_loads)
+
+
 def remove_ids(model: Model, ids: Sequence[int]) -> Model:
     """The model without the free blocks of the given ids (unknown ids are errors)."""
     ids = np.atleast_1d(np.asarray(ids, dtype=np.int64))

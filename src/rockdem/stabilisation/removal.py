@@ -251,7 +251,10 @@ def stabilise(
         if share > max_removal:
             return _done(target_fos, trials, False, *_too_much(current, mech, share, max_removal))
         fos = rate(cand, width=width)
-        chosen = add(rnd, f"round {rnd}: remove the {len(mech)} mechanism blocks", cand, fos, False)
+        label = f"round {rnd}: remove the {len(mech)} mechanism blocks"
+        notes = _edit.removal_notes(current.model, cand)
+        label += f" ({'; '.join(notes)})" if notes else ""
+        chosen = add(rnd, label, cand, fos, False)
         if meets(fos, target_fos) and smallest_set and len(mech) > 1:
             chosen = _smaller(current, mech, chosen, target_fos, width, rnd, add)
         current = _accept(trials, chosen)

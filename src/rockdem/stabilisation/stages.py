@@ -20,7 +20,6 @@ import numpy as np
 
 from ..analysis import analyse, analyse_from
 from ..errors import ModelWarning
-from ..loads import loads_left_on_rock
 from ..model import Model
 from ..results import CURRENT_NAMES, Analysis
 from ..solver import System, build_system
@@ -119,28 +118,11 @@ def _failed_in_stage(a, step: int) -> np.ndarray:
 
 
 def _warn_removed(before: Model, after: Model, where: str) -> None:
-    """Warnings naming the bolts and loads that went with the rock a stage
+    """A warning naming the bolts and loads that went with the rock a stage
     removed (or the line loads cut to the rock that is left)."""
-    gone = [
-        b.name or f"bolt {i + 1}"
-        for i, b in enumerate(before.bolts)
-        if not any(b is kept for kept in after.bolts)
-    ]
-    if gone:
-        warnings.warn(
-            f"{where} removes {_count(gone, 'bolt')} with its rock ({', '.join(gone)}): "
-            "its head or every joint it tied was in the rock removed; the later stages "
-            "are analysed without it",
-            ModelWarning,
-            stacklevel=3,
-        )
-    _, notes = loads_left_on_rock(after.blocks, before.loads)
+    notes = _edit.removal_notes(before, after)
     if notes:
         warnings.warn(f"{where}: {'; '.join(notes)}", ModelWarning, stacklevel=3)
-
-
-def _count(items, word: str) -> str:
-    return f"{len(items)} {word}{'s' if len(items) != 1 else ''}"
 
 
 def _keys(system: System) -> dict:
