@@ -6,7 +6,7 @@ JSON Schema that editors use for completion (``schema/rockdem-model.schema.json`
 is generated from the same models by :func:`json_schema`.
 
 Every problem with a file is raised as a :class:`ModelFileError` that names
-the file, the line (YAML only) and the key path, says what is wrong and how
+the file, the line and the key path, says what is wrong and how
 to fix it, in one line::
 
     slope.yaml:12: joints.bedding.friction_angle: 95 is out of range; give a value >= 0 and < 90

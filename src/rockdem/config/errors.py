@@ -7,6 +7,7 @@ from typing import Any
 import yaml
 
 from ..errors import InputError
+from .toml_lines import TomlLines
 
 
 class ModelFileError(InputError):
@@ -22,7 +23,7 @@ class ModelFileError(InputError):
     problem, fix : str
         What is wrong, and what to do about it.
     line : int, optional
-        1-based line of the key in the file (YAML only).
+        1-based line of the key in the file.
     """
 
     def __init__(
@@ -50,9 +51,12 @@ def _keypath(loc: Loc) -> str:
 
 
 def _line(nodes: Any, loc: Loc, *, key_line: bool = True) -> int | None:
-    """1-based line of the key (or the value) at ``loc`` in the YAML node tree."""
+    """1-based line of the key (or the value) at ``loc`` in the YAML node tree
+    (or a TOML file's :class:`.toml_lines.TomlLines`)."""
     if nodes is None or not loc:
         return None
+    if isinstance(nodes, TomlLines):
+        return nodes.line(loc)
     node = nodes
     for part in loc:
         if isinstance(node, yaml.MappingNode):

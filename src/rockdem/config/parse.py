@@ -29,6 +29,7 @@ from ..geometry.size import MAX_BLOCKS
 from .build import build_model
 from .errors import ModelFileError, _kind
 from .spec import ModelFile
+from .toml_lines import TomlLines
 from .validate import validate_document
 from .yaml_read import MAX_DEPTH, _check_depth, _load_yaml
 
@@ -44,8 +45,9 @@ def read_document(path: str | Path) -> tuple[dict, Any]:
     Returns
     -------
     data : dict
-    nodes : yaml.Node or None
-        The YAML node tree (for line numbers), None for TOML.
+    nodes : yaml.Node or TomlLines
+        Where the keys are, for line numbers: the YAML node tree, or a
+        :class:`.toml_lines.TomlLines` of a TOML file.
 
     Raises
     ------
@@ -200,6 +202,7 @@ def _parse_document(text: str, fmt: str, source: str) -> tuple[dict, Any]:
                 "a model nests at most a few levels: check the brackets",
             ) from None
         _check_depth(data, source)
+        nodes = TomlLines(text)  # scanned only if a line is asked for
     else:
         try:
             data, nodes = _load_yaml(text, source)
