@@ -310,3 +310,33 @@ def test_a_toml_model_file_error_has_the_line_in_the_api():
     with pytest.raises(ModelFileError) as info:
         parse_model(text, fmt="toml", source="m.toml")
     assert info.value.line == _line_of(text, "friction_angle = -1")
+
+
+def test_a_study_in_a_toml_model_names_its_line(tmp_path):
+    """The study's inputs are quoted keys (a key path holds dots)."""
+    text = (
+        BOX
+        + "\n[study]\nsamples = 10\n\n[study.inputs]\n"
+        + '"joints.bedding.friction_angle" = {distribution = "normal", mean = 35, sd = 2}\n'
+        + '"joints.bedding.nope" = {distribution = "normal", mean = 35, sd = 2}\n'
+    )
+    (tmp_path / "m.toml").write_text(text)
+    r = CliRunner().invoke(app, ["study", str(tmp_path / "m.toml"), "-o", str(tmp_path / "out")])
+    line = _line_of(text, "nope")
+    assert_refused(r, f"m.toml:{line}: study.inputs.joints.bedding.nope: no such number")
+
+
+def test_a_warning_about_a_toml_model_names_its_line(tmp_path):
+    import warnings
+
+    from rockdem.config import load_model
+    from rockdem.errors import ModelWarning
+
+    text = BOX + "\n[loads]\ngravity = false\nseismic_h = 0.1\n"
+    (tmp_path / "m.toml").write_text(text)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", ModelWarning)
+        load_model(tmp_path / "m.toml")
+    said = [str(w.message) for w in caught if issubclass(w.category, ModelWarning)]
+    line = _line_of(text, "seismic_h")
+    assert len(said) == 1 and f"m.toml:{line}: loads.seismic_h with gravity off" in said[0]
