@@ -340,3 +340,16 @@ def test_a_warning_about_a_toml_model_names_its_line(tmp_path):
     said = [str(w.message) for w in caught if issubclass(w.category, ModelWarning)]
     line = _line_of(text, "seismic_h")
     assert len(said) == 1 and f"m.toml:{line}: loads.seismic_h with gravity off" in said[0]
+
+
+def test_a_cross_check_words_its_fix_in_toml(tmp_path):
+    """The checks between sections (a free block with no unit weight when
+    two materials are defined) said "give `material:` or `unit_weight:`" in
+    a .toml file; they say `material = ...`, as validation errors do, and
+    the YAML of the model keeps its own syntax."""
+    last = 'material = "rock"\nvertices = [[0, 1]'
+    text = BOX.replace(last, "vertices = [[0, 1]") + "\n[materials.clay]\nunit_weight = 20\n"
+    said = _run(tmp_path, text)
+    assert "give `material = ...` or `unit_weight = ...`" in said
+    yaml_said = _run(tmp_path, _as_yaml(text), "m.yaml")
+    assert "give `material:` or `unit_weight:`" in yaml_said

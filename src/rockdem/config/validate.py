@@ -36,9 +36,16 @@ def validate_document(
     except ValidationError as exc:
         toml = (fmt or Path(source).suffix.lstrip(".")).lower() == "toml"
         raise _from_validation(exc, source, nodes, toml) from None
-    _check_references(cfg, source, nodes)
-    _check_unique_names(cfg, source, nodes)
-    _check_units(cfg, source, nodes)
+    try:
+        _check_references(cfg, source, nodes)
+        _check_unique_names(cfg, source, nodes)
+        _check_units(cfg, source, nodes)
+    except ModelFileError as exc:
+        if (fmt or Path(source).suffix.lstrip(".")).lower() != "toml":
+            raise
+        # the fix in TOML's syntax ("set `joint:` to a defined joint" in a .toml file)
+        fix = _in_toml(exc.fix, ())
+        raise ModelFileError(exc.source, exc.key, exc.problem, fix, exc.line) from None
     return cfg
 
 
@@ -307,7 +314,8 @@ def _in_toml(fix: str, loc: Loc) -> str:
     path = ".".join(str(p) for p in loc if not isinstance(p, int)) or "table"
     for yaml, toml in TOML_FIXES.items():
         fix = fix.replace(yaml, toml.format(path=path))
-    return re.sub(r"^add `([^`]*):`", r"add `\1 = ...`", fix)  # `friction_angle = ...`
+    # `friction_angle:` -> `friction_angle = ...`, wherever the fix names a key
+    return re.sub(r"`([A-Za-z_][\w.]*):`", r"`\1 = ...`", fix)
 
 
 def _from_validation(
