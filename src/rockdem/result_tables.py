@@ -367,6 +367,7 @@ def fos_summary(fos) -> dict[str, Any]:
     equilibrium below the limit (:func:`bolt_summary`).
     """
     failed, base = fos.failed_analysis, fos.stable_analysis
+    shown = base if base is not None else failed  # no stable trial: the mechanism's
     mechanism = mechanism_summary(failed)
     brittle = cohesion_lost_in_shear(base) if base is not None and fos.value is not None else []
     mechanism["warnings"] = [*toppling_caution(fos), *brittle, *mechanism["warnings"]]
@@ -379,7 +380,7 @@ def fos_summary(fos) -> dict[str, Any]:
             "certified_upper_bound": fos.certified_upper_bound,
             "confirmed_upper_bound": fos.confirmed_upper_bound,
             "relaxation": None if failed is None else failed.evidence.relaxation,
-            "trust": [] if base is None else trust_statements(base, fos),
+            "trust": [] if shown is None else trust_statements(shown, fos),
             "definition": fos.definition,
             "mechanism_blocks": [] if failed is None else [int(i) for i in failed.unstable_blocks],
             "mechanism_factor": None if failed is None else failed.strength_factor,

@@ -88,6 +88,12 @@ def trust_statements(a: Analysis, fos: FactorOfSafety | None = None) -> list[str
         top = "no failure found" if not np.isfinite(hi) else f"failing at F = {hi:.4g}"
         bottom = f"stable at F = {lo:.4g}" if lo > 0 else "stable at no factor tried"
         out.append(f"No factor of safety ({fos.mode}): {bottom}, {top}.")
+        if fos.mode == "strength-independent":
+            out.append(
+                f"The mechanism forms even with the strengths divided by {hi:.4g} ({1 / hi:.3g} "
+                "times their values): toppling or a free block, which strength reduction "
+                "cannot rate; rate it by the support force that holds it (`rockdem stabilise`)."
+            )
     if failed is not None:
         ev = failed.evidence
         proof = ev.proof or "undecided"

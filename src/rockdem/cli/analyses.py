@@ -421,8 +421,9 @@ def _print_fos(doc: dict[str, Any]) -> None:
         )
     else:
         out.print(
-            "factor of safety: none: the mechanism forms even with the strengths scaled by "
-            f"{hi:.4g} (toppling or a free block; strength does not control it)"
+            "factor of safety: none: the mechanism forms even with the strengths divided by "
+            f"{hi:.4g} ({1 / hi:.3g} times their values: toppling or a free block; strength "
+            "does not control it)"
         )
     blocks = doc["mechanism_blocks"]
     if blocks:
