@@ -509,3 +509,19 @@ def test_sarma_rates_a_chain_of_three_wedges():
     assert fos.value == pytest.approx(1.19421, rel=0.002)
     assert len(le.bodies) == 3
     assert all(f.normal_force > 0 for f in le.faces)
+
+
+def test_sarma_counts_the_bolts():
+    """A block on a 35 degree plane (phi 30: 0.82 unbolted) held by a bolt at
+    30 degrees to the plane that yields at 30 (Hoek & Bray 1981, ch. 7:
+    FS = (W cos psi + T sin theta) tan phi / (W sin psi - T cos theta)).
+    Passive bolts are elements of the DEM, not loads, and Sarma's bodies
+    left them out: the LE read the unbolted 0.82 beside the DEM's 1.78."""
+    import test_bolts as tb
+
+    fos = rd.factor_of_safety(tb.block_with_bolt(30.0))
+    exact = tb.bolted_fos(30.0, 30.0)
+    le = sarma(fos)
+    assert fos.value == pytest.approx(exact, rel=0.005)
+    assert le.fos == pytest.approx(exact, rel=0.005)
+    assert any("the bolts act on the LE's bodies" in n for n in le.notes)

@@ -16,7 +16,8 @@ blocks:
   face with a uniform normal stress, so its shear strength is
   ``(sum c_k L_k + N sum L_k tan phi_k / sum L_k) / F``;
 * each body is in force equilibrium under its loads (weight, water,
-  surcharges, bolts: the DEM's own load vector), the face forces and
+  surcharges, anchors: the DEM's own load vector; passive bolts with their
+  forces at the DEM's last equilibrium below the limit), the face forces and
   ``Kc W`` horizontally in the direction of its motion.
 
 A chain of ``n`` bodies with ``n`` base faces and ``n - 1`` faces between
@@ -165,9 +166,9 @@ def sarma(source: FactorOfSafety | Analysis) -> SarmaResult:
     -------
     SarmaResult
     """
-    dem_fos = None
+    dem_fos, stable = None, None
     if isinstance(source, FactorOfSafety):
-        dem_fos = source.value
+        dem_fos, stable = source.value, source.stable_analysis
         failed = source.failed_analysis
         if failed is None:
             why = "the DEM found no failure up to the largest factor it tried: no mechanism"
@@ -287,9 +288,10 @@ def sarma(source: FactorOfSafety | Analysis) -> SarmaResult:
     f_body = np.zeros((n_bodies, 2))
     weight = np.zeros(n_bodies)
     vx = np.zeros(n_bodies)
+    on_blocks = system.f_block[:, :2] + _bolt_forces(system, stable or failed)
     for g in range(n_bodies):
         members = group == g
-        f_body[g] = system.f_block[members, :2].sum(0)
+        f_body[g] = on_blocks[members].sum(0)
         weight[g] = blocks.weight[members].sum()
         vx[g] = float(np.sum(blocks.weight[members] * motion[members, 0]))
 
@@ -311,6 +313,23 @@ def sarma(source: FactorOfSafety | Analysis) -> SarmaResult:
     )
     result = SarmaResult(fos, "", kc, dem_fos, bodies, faces_out)
     return replace(result, notes=_notes(result, failed, group, joints))
+
+
+def _bolt_forces(system, analysis) -> np.ndarray:
+    """The forces the bolts put on each block, ``(n_blocks, 2)``, as the
+    DEM has them in ``analysis`` (the last equilibrium below the limit):
+    passive bolts are elements of the DEM, not loads, so Sarma's bodies take
+    them as loads (a crossing inside a body cancels).  (Not counted, a
+    bolted block read its unbolted factor: 0.82 for the DEM's 1.78.)"""
+    out = np.zeros((system.blocks.n_blocks, 2))
+    if system.bolts is None:
+        return out
+    asm, free = system.assembly, ~system.blocks.fixed
+    q = np.zeros(asm.n_dof)
+    q[asm.dof[free].ravel()] = analysis.displacement[free].ravel()
+    pull = -system.bolts.internal_force(q)  # on the blocks, as the springs' resistance
+    out[free] = pull[asm.dof[free][:, :2]]
+    return out
 
 
 def _solve_component(members, own, f_body, weight, vx):
@@ -435,6 +454,12 @@ def _notes(result: SarmaResult, failed: Analysis, group, joints) -> list[str]:
     """Where the limit equilibrium and the DEM differ, in words."""
     notes = []
     faces = failed.system.interfaces
+    if failed.system.bolts is not None:
+        notes.append(
+            "the bolts act on the LE's bodies with the forces the DEM found in them at its "
+            "last equilibrium below the limit (a bolt not yet at its capacity there may carry "
+            "more as the blocks move)"
+        )
     current = failed.interfaces.current_name if failed.interfaces.current is not None else None
     if current is not None:
         holding = [
