@@ -464,3 +464,51 @@ def test_the_bolt_line_says_tension_or_compression(capsys):
     assert "P: crosses 2 joints, largest axial force 99.28 kN compression (99% of capacity)" in said
     assert "T: crosses 1 joint, largest axial force 12.5 kN tension (12% of capacity)" in said
     assert "Z: crosses 1 joint, no axial force (0% of capacity)" in said
+
+
+# ------------------------------------------------- installed after the loads
+def _stable_block_with_bolt(**bolt):
+    """The bolted block of ``block_with_bolt`` on a 20 degree plane (phi 30:
+    stable unbolted, FS = tan30/tan20 = 1.586), its bolt at 30 degrees to it."""
+    joint = Joint(normal_stiffness=1e6, friction_angle=PHI)
+    m = V.block_on_plane(20.0, joint, width=WIDTH, height=HEIGHT, unit_weight=GAMMA)
+    R, t = V._rot(-20.0), np.radians(30.0)
+    head = R @ np.array([WIDTH / 2 + HEIGHT * np.cos(t) / np.sin(t), HEIGHT])
+    args = dict(
+        head=tuple(head),
+        angle=180.0 + 30.0 - 20.0,
+        length=HEIGHT / np.sin(t) + 2.0,
+        capacity=30.0,
+        axial_stiffness=1e4,
+    )
+    return m.replace(bolts=[Bolt(**{**args, **bolt})])  # fmt: skip
+
+
+def test_a_bolt_installed_after_the_loads_carries_none_of_them():
+    """In from the start, the bolt shares the block's settlement under its
+    weight; installed in the slope standing under it, it carries nothing
+    (only a pretension it is locked off at), and resists only what moves
+    after: at the limit it reaches its capacity either way, so the factor
+    of safety is Hoek & Bray's with T = 30 (Wyllie & Mah 2004, eq. 6.23)."""
+    before = rd.analyse(_stable_block_with_bolt())
+    after = rd.analyse(_stable_block_with_bolt(installed="after_loads"))
+    assert before.stable and after.stable
+    assert np.max(np.abs(before.bolts.axial_force)) > 1e-3  # the settlement loads it
+    assert np.all(after.bolts.axial_force == 0) and np.all(after.bolts.shear_force == 0)
+    assert np.all(after.bolts.extension == 0)
+    locked = rd.analyse(_stable_block_with_bolt(installed="after_loads", pretension=10.0))
+    assert locked.bolts.axial_force == pytest.approx([10.0], rel=0.02)
+    p, s, t = np.radians([PHI, 20.0, 30.0])
+    exact = (W * np.cos(s) + 30 * np.sin(t)) * np.tan(p) / (W * np.sin(s) - 30 * np.cos(t))
+    fos = rd.factor_of_safety(_stable_block_with_bolt(installed="after_loads"))
+    assert fos.value == pytest.approx(exact, rel=0.005)
+
+
+def test_a_bolt_to_go_in_after_loads_the_slope_cannot_carry_is_never_installed():
+    """The block on 35 degrees (phi 30) slides under its weight before the
+    bolt goes in: the analysis says so, naming the bolt."""
+    model = block_with_bolt(30.0, installed="after_loads", name="B7")
+    with pytest.warns(rd.ModelWarning, match=r"bolts B7 \(installed: after_loads\) were never"):
+        a = rd.analyse(model)
+    assert not a.stable
+    assert rd.analyse(block_with_bolt(30.0, name="B7")).stable  # in from the start, it holds

@@ -463,3 +463,22 @@ def test_loads_go_with_the_rock_they_act_on():
     on_1 = LineLoad((0, 1), (2, 1), 0.0, -10.0, name="on 1")
     untouched = _edit.remove_ids(model.replace(loads=rd.Loads(lines=(on_1,))), [2])
     assert untouched.loads.lines == (on_1,)
+
+
+def test_bolts_installed_after_the_loads_go_through_the_stages():
+    """Bolts put in after the loads carry nothing at stage 0 and keep the
+    displacement they were installed at through an excavation stage (its
+    crossings are carried like the joints' state)."""
+    from dataclasses import replace as with_
+
+    model = _two_blocks_and_a_yielding_bolt()
+    model = model.replace(bolts=[with_(b, installed="after_loads") for b in model.bolts])
+    with pytest.warns(rd.ModelWarning, match="in 2 removed with its rock"):
+        ex = excavate_in_stages(model, [Stage("cut", blocks=(2,))])
+    before, after = ex.stages[0].analysis, ex.stages[1].analysis
+    assert np.all(before.bolts.axial_force == 0) and before.bolts.first_yield.tolist() == [-1, -1]
+    assert after.stable and after.state.bolt_reference is not None
+    assert not np.isnan(after.state.bolt_reference).any()
+    # the carried reference is the stage-0 displacement of that crossing
+    assert after.state.bolt_reference[0] == pytest.approx(before.state.bolt_reference[0])
+    assert abs(after.bolts.axial_force[0]) < 0.01  # block 1 barely moved: below capacity

@@ -79,7 +79,8 @@ def _settle(
         response, deferred = _widest_openings_first(system, state, sol.response, dn)
         new_state = commit(system.springs, state, response, ds, stage)
         if system.bolts is not None:  # bolts that reached their capacity, and when
-            new_state = new_state.with_bolt_yield(system.bolts.forces(sol.q)[2], stage)
+            yielded = system.bolts.forces(sol.q, new_state.bolt_reference)[2]
+            new_state = new_state.with_bolt_yield(yielded, stage)
         if total:
             new_state = new_state.without_slip()
         resp, r = residual(system, sol.q, new_state, load_factor, factor)
@@ -376,7 +377,10 @@ def analyse(
         check_count("analyse load_steps", load_steps, MAX_LOAD_STEPS)
     system = model if isinstance(model, System) else build_system(model)
     n_steps = load_steps or system.model.settings.load_steps
-    state = SpringState.initial(system.springs.n_springs)
+    bolts = system.bolts
+    state = SpringState.initial(
+        system.springs.n_springs, None if bolts is None else bolts.initial_reference()
+    )
     q = np.zeros(system.assembly.n_dof)
     steps: list[Step] = []
     lam_prev = 0.0
@@ -403,6 +407,8 @@ def analyse(
             progress(k, n_steps)
         if not sol.converged:
             log.info("load step %d/%d: no equilibrium (%s)", k, n_steps, ev)
+            if state.bolts_waiting and show_mechanism:
+                _warn_bolts_not_installed(system, state)
             failed = _package(system, sol, state, lam_prev, strength_factor, False, steps, q)
             failed = prove_in_region(system, failed, state, strength_factor)
             if failed.evidence.certified and not show_mechanism:
@@ -426,11 +432,49 @@ def analyse(
             return replace(
                 _limit_contacts(system, failed, state, q, lam_prev), unloaded_limit=limit
             )
+    if state.bolts_waiting:  # the slope stands under its loads: the late bolts go in
+        sol, state, q = _install_bolts(system, sol, state, q, lam_prev, strength_factor, k)
     done = _package(system, sol, state, lam_prev, strength_factor, True, steps, q)
     text = large_displacement(done)
     if text is not None:
         warnings.warn(ModelWarning(text), stacklevel=2)
     return done
+
+
+def _install_bolts(system, sol, state, q, load_factor, factor, stage):
+    """The bolts to go in after the loads installed at ``q``, and the
+    equilibrium their pretension moves the slope to (none: as it was)."""
+    bolts = system.bolts
+    waiting = np.isnan(state.bolt_reference[:, 0])
+    state = state.with_bolts_installed(bolts.displacement(q))
+    if not np.any(bolts.pretension[waiting]):
+        return sol, state, q
+    locked, new_state = _settle(system, state, q, load_factor, factor, stage)
+    if not locked.converged:
+        warnings.warn(
+            ModelWarning(
+                "the pretension of the bolts installed after the loads leaves no equilibrium "
+                "(reported as before it was locked in); lower the pretension"
+            ),
+            stacklevel=3,
+        )
+        return sol, state, q
+    return locked, new_state, locked.q
+
+
+def _warn_bolts_not_installed(system, state) -> None:
+    """The bolts to be installed after the loads never went in: the slope
+    found no equilibrium under the loads without them."""
+    waiting = np.isnan(state.bolt_reference[:, 0])
+    names = dict.fromkeys(np.asarray(system.bolts.names)[system.bolts.bolt[waiting]])
+    warnings.warn(
+        ModelWarning(
+            f"bolts {', '.join(map(str, names))} (installed: after_loads) were never installed: "
+            "the slope finds no equilibrium under its loads without them; to hold the slope "
+            "as the loads come on, install them before the loads (installed: before_loads)"
+        ),
+        stacklevel=3,
+    )
 
 
 #: an equilibrium in which a joint opens or slides by more than this share of

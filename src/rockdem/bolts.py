@@ -36,6 +36,8 @@ import shapely
 from .errors import InputError
 
 KINDS = ("bolt", "cable")
+#: when a bolt goes in: with the loads (from the first load step) or after them
+INSTALLED = ("before_loads", "after_loads")
 #: the rock must start within this share of the bolt's length from its head
 HEAD_REACH = 0.01
 
@@ -70,6 +72,13 @@ class Bolt:
         bolt / spacing).
     kind : {"bolt", "cable"}
     name : str
+    installed : {"before_loads", "after_loads"}
+        ``before_loads`` (the seed paper's bolted example): in the slope from
+        the first load step, so the rock's settlement under the loads loads
+        it too.  ``after_loads``: installed in the slope standing under its
+        loads (a slope reinforced after excavation): it carries only its
+        pretension then, and resists only further movement (strength
+        reduction, excavation stages).
     """
 
     head: tuple[float, float]
@@ -84,6 +93,7 @@ class Bolt:
     spacing: float = 1.0
     kind: str = "bolt"
     name: str = ""
+    installed: str = "before_loads"
 
     def __post_init__(self) -> None:
         where = f"bolts {self.name}" if self.name else "bolts"
@@ -96,6 +106,10 @@ class Bolt:
         object.__setattr__(self, "head", head)
         if self.kind not in KINDS:
             raise InputError(where, f"kind {self.kind!r} is unknown", f"use one of {KINDS}")
+        if self.installed not in INSTALLED:
+            raise InputError(
+                where, f"installed {self.installed!r} is unknown", f"use one of {INSTALLED}"
+            )
         positive = ("length", "capacity", "axial_stiffness", "spacing")
         for key in positive:
             v = getattr(self, key)
@@ -154,6 +168,7 @@ class Crossings:
     operator: sp.csr_array  # (2 m, n_dof)
     gather: sp.csr_array  # (nnz of the pattern, 36 m)
     B: np.ndarray  # (m, 2, 6), zero columns for fixed blocks
+    late: np.ndarray  # (m,) bool: the bolt is installed after the loads
 
     @property
     def n(self) -> int:
@@ -167,10 +182,25 @@ class Crossings:
         """``(extension, offset)`` at every crossing, shape (m, 2)."""
         return (self.operator @ q).reshape(-1, 2)
 
-    def forces(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def initial_reference(self) -> np.ndarray | None:
+        """The displacement each crossing is installed at, before the loads:
+        zero, and NaN for a bolt installed after them (None: every bolt is
+        in from the start; see :class:`rockdem.spring_law.SpringState`)."""
+        if not self.late.any():
+            return None
+        return np.where(np.repeat(self.late[:, None], 2, axis=1), np.nan, 0.0)
+
+    def forces(
+        self, q: np.ndarray, reference: np.ndarray | None = None
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Axial and shear force per unit width (m, 2), tangent (m, 2) and
-        yielded flags (m,) at displacements ``q``."""
+        yielded flags (m,) at displacements ``q``.  ``reference``: the
+        displacement at which each crossing was installed (NaN: not yet,
+        no force), None for zero."""
         d = self.displacement(q)
+        if reference is not None:
+            installed = ~np.isnan(reference[:, 0])
+            d = d - np.where(installed[:, None], reference, 0.0)
         t_trial = self.pretension + self.k_axial * d[:, 0]
         v_trial = self.k_shear * d[:, 1]
         t = np.clip(t_trial, self.t_min, self.t_max)
@@ -181,11 +211,16 @@ class Crossings:
             [np.where(axial_elastic, self.k_axial, 0.0), np.where(shear_elastic, self.k_shear, 0.0)]
         )
         yielded = (t_trial >= self.t_max) | ((self.t_min < 0) & (t_trial <= self.t_min))
-        return np.column_stack([t, v]), tangent, yielded
+        force = np.column_stack([t, v])
+        if reference is not None and not installed.all():
+            force[~installed] = 0.0
+            tangent[~installed] = 0.0
+            yielded &= installed
+        return force, tangent, yielded
 
-    def internal_force(self, q: np.ndarray) -> np.ndarray:
+    def internal_force(self, q: np.ndarray, reference: np.ndarray | None = None) -> np.ndarray:
         """The bolts' forces on the blocks' free dofs (resisting, like springs)."""
-        f, _, _ = self.forces(q)
+        f, _, _ = self.forces(q, reference)
         return self._operator_t @ f.ravel()
 
     def stiffness_data(self, tangent: np.ndarray) -> np.ndarray:
@@ -404,6 +439,7 @@ def place_bolts(bolts, blocks, faces, asm):
         operator=operator,
         gather=gather,
         B=B,
+        late=np.array([bolts[b].installed == "after_loads" for b in bolt_idx], dtype=bool),
     )
 
 
@@ -455,14 +491,21 @@ class BoltResults:
 
 
 def bolt_results(
-    crossings: Crossings | None, q: np.ndarray, first_yield: np.ndarray | None = None
+    crossings: Crossings | None,
+    q: np.ndarray,
+    first_yield: np.ndarray | None = None,
+    reference: np.ndarray | None = None,
 ) -> BoltResults | None:
     """Bolt forces at free-dof displacements ``q`` (None without bolts);
-    ``first_yield``: the stages of first yield (SpringState.bolt_first_yield)."""
+    ``first_yield``: the stages of first yield (SpringState.bolt_first_yield);
+    ``reference``: where each crossing was installed (SpringState.bolt_reference:
+    the extension and offset are counted from there, 0 before)."""
     if crossings is None:
         return None
-    f, _, yielded = crossings.forces(q)
+    f, _, yielded = crossings.forces(q, reference)
     d = crossings.displacement(q)
+    if reference is not None:
+        d = np.where(np.isnan(reference), 0.0, d - np.nan_to_num(reference))
     per_bolt = crossings.spacing
     return BoltResults(
         np.asarray(crossings.names, dtype=object)[crossings.bolt],

@@ -99,6 +99,9 @@ def admissible_load(
         op_b = sp.csr_array(bolts.operator)
         b_lo = np.concatenate([bolts.t_min, -bolts.v_max])
         b_hi = np.concatenate([bolts.t_max, bolts.v_max])
+        if state.bolts_waiting:  # bolts to go in after the loads carry nothing yet
+            waiting = np.tile(np.isnan(state.bolt_reference[:, 0]), 2)
+            b_lo, b_hi = np.where(waiting, 0.0, b_lo), np.where(waiting, 0.0, b_hi)
     if region is not None:
         keep_block = np.asarray(region, dtype=bool) & ~system.blocks.fixed
         rows = np.sort(asm.dof[keep_block].ravel())

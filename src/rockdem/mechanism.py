@@ -42,7 +42,7 @@ def newton_mechanism(system: System, sol: Solve, state, load_factor, factor):
     if asm.n_dof == 0:
         return out, np.zeros(n_blocks, dtype=bool)
     resp, r = residual(system, sol.q, state, load_factor, factor)
-    J = tangent(system, resp, sol.q, 1e-6)
+    J = tangent(system, resp, sol.q, 1e-6, state.bolt_reference)
     try:
         d = system.factorizer.factorize(J).solve(r)  # (the pattern analysed once)
     except RuntimeError:

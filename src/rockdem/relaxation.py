@@ -152,7 +152,7 @@ def relax(
     # the same law and equations as Newton; the strengths are fixed for the run
     strengths = strength(springs, state, factor, system.model.settings.reduce_tensile)
 
-    unbalanced = _Unbalanced(system, state.slip, strengths, f)
+    unbalanced = _Unbalanced(system, state.slip, strengths, f, state.bolt_reference)
 
     mass = _mass(system)
     elastic = system.elastic_scale * max(load_factor, 1e-12)
@@ -260,7 +260,7 @@ class _Unbalanced:
     DENSE_ENTRIES, and the layout stays interleaved.)
     """
 
-    def __init__(self, system, slip, strengths, f):
+    def __init__(self, system, slip, strengths, f, bolt_reference=None):
         asm = system.assembly
         springs = system.springs
         n = springs.n_springs
@@ -293,6 +293,7 @@ class _Unbalanced:
         self.low = np.empty(n)
         self.f = f
         self.bolts = system.bolts
+        self.bolt_reference = bolt_reference
 
     def __call__(self, q: np.ndarray) -> np.ndarray:
         """The out-of-balance force at ``q`` (a new array)."""
@@ -314,7 +315,7 @@ class _Unbalanced:
         np.clip(ps, self.low, cap, out=ps)
         r = self.f - self.BtW @ self.p
         if self.bolts is not None:
-            r -= self.bolts.internal_force(q)
+            r -= self.bolts.internal_force(q, self.bolt_reference)
         return r
 
 

@@ -258,7 +258,7 @@ class Analysis:
         asm, free = system.assembly, ~system.blocks.fixed
         q = np.zeros(asm.n_dof)
         q[asm.dof[free].ravel()] = self.displacement[free].ravel()
-        return bolt_results(system.bolts, q, self.state.bolt_first_yield)
+        return bolt_results(system.bolts, q, self.state.bolt_first_yield, self.state.bolt_reference)
 
     @property
     def failed_interfaces(self) -> np.ndarray:

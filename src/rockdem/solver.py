@@ -206,15 +206,16 @@ def residual(system: System, q, state, load_factor, factor, strengths=None):
     resp = evaluate(system.springs, state, dn, ds, factor, reduce, strengths)
     r = load_factor * system.f_ext - asm.internal_force(resp.force)
     if system.bolts is not None:
-        r -= system.bolts.internal_force(q)
+        r -= system.bolts.internal_force(q, state.bolt_reference)
     return resp, r
 
 
-def tangent(system: System, resp: Response, q, shift: float = 0.0) -> sp.csc_array:
-    """Consistent tangent of the springs (and bolts) at ``q``, plus ``shift x K0``."""
+def tangent(system: System, resp: Response, q, shift: float = 0.0, reference=None) -> sp.csc_array:
+    """Consistent tangent of the springs (and bolts, installed at
+    ``reference``) at ``q``, plus ``shift x K0``."""
     J = system.assembly.stiffness(resp.d_nn, resp.d_sn, resp.d_ss, shift, system.K0)
     if system.bolts is not None:
-        _, d_bolt, _ = system.bolts.forces(q)
+        _, d_bolt, _ = system.bolts.forces(q, reference)
         J.data += system.bolts.stiffness_data(d_bolt)
     return J
 
@@ -236,8 +237,9 @@ class _Tangents:
     iterations of a creeping solve); those steps reuse the factor.
     """
 
-    def __init__(self, system: System) -> None:
+    def __init__(self, system: System, bolt_reference=None) -> None:
         self.system = system
+        self.reference = bolt_reference
         self.key: tuple | None = None
         self.lu = None
         self.reused = 0
@@ -246,7 +248,7 @@ class _Tangents:
         system = self.system
         parts = [resp.d_nn, resp.d_sn, resp.d_ss]
         if system.bolts is not None:
-            parts.append(system.bolts.forces(q)[1].ravel())
+            parts.append(system.bolts.forces(q, self.reference)[1].ravel())
         key = (beta, np.concatenate(parts))
         if (
             self.key is not None
@@ -257,7 +259,7 @@ class _Tangents:
         ):  # (a PARDISO factor is valid until its handle factorises another matrix)
             self.reused += 1
             return self.lu
-        self.key, self.lu = key, _lu(system, tangent(system, resp, q, beta))
+        self.key, self.lu = key, _lu(system, tangent(system, resp, q, beta, self.reference))
         return self.lu
 
 
@@ -298,7 +300,7 @@ def newton(system, state, load_factor, factor, q, max_it):
     bound = BLOWUP * system.elastic_scale * max(load_factor, 1e-12)
     direction = np.zeros_like(q)
     q_start, reach = q, system.elastic_scale * load_factor
-    tangents = _Tangents(system)
+    tangents = _Tangents(system, state.bolt_reference)
     for it in range(1, max_it + 1):
         if merit <= tol:
             return Solve(True, q, resp, it - 1, history, "converged", direction)

@@ -39,6 +39,10 @@ class SpringState:
     bolt_first_yield : ndarray of int or None
         Stage at which each bolt crossing (rockdem.bolts) first reached its
         axial capacity, -1 if never; None without bolts.
+    bolt_reference : ndarray (m, 2) or None
+        The displacement ``(extension, offset)`` of each bolt crossing when
+        it was installed: NaN while a bolt installed after the loads is not
+        in yet; None when every bolt is in from the start, at zero.
     """
 
     slip: np.ndarray
@@ -46,20 +50,34 @@ class SpringState:
     broken: np.ndarray
     first_failure: np.ndarray
     bolt_first_yield: np.ndarray | None = None
+    bolt_reference: np.ndarray | None = None
 
     @classmethod
-    def initial(cls, n: int) -> SpringState:
-        return cls(np.zeros(n), np.zeros(n, dtype=bool), np.zeros(n, dtype=bool), np.full(n, -1))
+    def initial(cls, n: int, bolt_reference: np.ndarray | None = None) -> SpringState:
+        return cls(
+            np.zeros(n),
+            np.zeros(n, dtype=bool),
+            np.zeros(n, dtype=bool),
+            np.full(n, -1),
+            bolt_reference=bolt_reference,
+        )
 
     def without_slip(self) -> SpringState:
         """The same failure flags with the plastic slip set to zero."""
-        return SpringState(
-            np.zeros_like(self.slip),
-            self.yielded,
-            self.broken,
-            self.first_failure,
-            self.bolt_first_yield,
-        )
+        return replace(self, slip=np.zeros_like(self.slip))
+
+    def with_bolts_installed(self, displacement: np.ndarray) -> SpringState:
+        """The state with the bolts not yet in installed at ``displacement``
+        (of every crossing, (m, 2)): from here they resist further movement."""
+        ref = self.bolt_reference
+        if ref is None or not np.isnan(ref).any():
+            return self
+        return replace(self, bolt_reference=np.where(np.isnan(ref), displacement, ref))
+
+    @property
+    def bolts_waiting(self) -> bool:
+        """Are there bolts to be installed after the loads, not in yet?"""
+        return self.bolt_reference is not None and bool(np.isnan(self.bolt_reference).any())
 
     def with_bolt_yield(self, yielded: np.ndarray, stage: int) -> SpringState:
         """The state with the bolt crossings yielded now recorded (first stage kept)."""
@@ -172,4 +190,4 @@ def commit(
     broken = state.broken | response.open
     newly = (yielded | broken) & (state.first_failure < 0)
     first = np.where(newly, stage, state.first_failure)
-    return SpringState(new_slip, yielded, broken, first, state.bolt_first_yield)
+    return replace(state, slip=new_slip, yielded=yielded, broken=broken, first_failure=first)

@@ -332,5 +332,9 @@ class BoltSpec(_Section):
     """Out-of-plane spacing of the bolt row (the section carries force / spacing)."""
     kind: Literal["bolt", "cable"] = "bolt"
     """`cable`: no compression and no dowel action."""
+    installed: Literal["before_loads", "after_loads"] = "before_loads"
+    """`before_loads`: in the slope from the first load step, loaded by the rock's
+    settlement too (the seed paper's bolted example); `after_loads`: put into the
+    slope standing under its loads, it resists only further movement."""
     name: str = ""
     """Label reported with results."""

@@ -169,19 +169,22 @@ def carry_state(old: System, state: SpringState, new: System) -> SpringState:
         yielded[dst] = state.yielded[src]
         broken[dst] = state.broken[src]
         first[dst] = state.first_failure[src]
-    return SpringState(slip, yielded, broken, first, _carry_bolt_yield(old, state, new, matched))
+    yielded_at, reference = _carry_bolts(old, state, new, matched)
+    return SpringState(slip, yielded, broken, first, yielded_at, reference)
 
 
-def _carry_bolt_yield(old: System, state: SpringState, new: System, matched: dict):
-    """The stage at which each bolt crossing of ``new`` first yielded, from the
-    same bolt's crossing of the same interface in ``old`` (-1: never, or a
+def _carry_bolts(old: System, state: SpringState, new: System, matched: dict):
+    """The stage at which each bolt crossing of ``new`` first yielded, and the
+    displacement it was installed at, from the same bolt's crossing of the
+    same interface in ``old`` (-1 and the crossing's own start for a
     crossing the excavation made new).  (Not carried, a bolt that yielded
     under gravity was reported yielding first at the excavation stage.)"""
     if new.bolts is None:
-        return None
+        return None, None
     first = np.full(new.bolts.n, -1)
+    reference = new.bolts.initial_reference()
     if old.bolts is None or state.bolt_first_yield is None:
-        return first
+        return first, reference
     # the same Bolt objects (a removal drops some: positions shift)
     position = {id(b): k for k, b in enumerate(new.model.bolts)}
     renumber = [position.get(id(b), -1) for b in old.model.bolts]
@@ -189,11 +192,18 @@ def _carry_bolt_yield(old: System, state: SpringState, new: System, matched: dic
         (renumber[b], int(i)): int(f)
         for b, i, f in zip(old.bolts.bolt, old.bolts.interface, state.bolt_first_yield, strict=True)
     }
+    where = {
+        (renumber[b], int(i)): c
+        for c, (b, i) in enumerate(zip(old.bolts.bolt, old.bolts.interface, strict=True))
+    }
     for c, (b, i) in enumerate(zip(new.bolts.bolt, new.bolts.interface, strict=True)):
         j = matched.get(int(i))
         if j is not None:
             first[c] = before.get((int(b), j), -1)
-    return first
+            k = where.get((int(b), j))
+            if k is not None and state.bolt_reference is not None and reference is not None:
+                reference[c] = state.bolt_reference[k]
+    return first, reference
 
 
 def _carry_q(old: System, disp: np.ndarray, new: System) -> np.ndarray:
@@ -247,6 +257,8 @@ def excavate_in_stages(model: Model, stages: Sequence[Stage], *,
         if carry:
             state0 = carry_state(prev_sys, prev.state, sys_k)
             q0 = _carry_q(prev_sys, prev.displacement, sys_k)
+            if state0.bolts_waiting:  # crossings of bolts put in after the loads, cut anew
+                state0 = state0.with_bolts_installed(sys_k.bolts.displacement(q0))
             a = analyse_from(sys_k, state0, q0, stage=step)
             new_failures = _failed_in_stage(a, step)
         else:
