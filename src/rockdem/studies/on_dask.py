@@ -4,8 +4,12 @@ is passed on as it arrives (a task that failed becomes an error row)."""
 
 from __future__ import annotations
 
+import logging
 import os
 import re
+import signal
+import threading
+from contextlib import contextmanager, nullcontext
 
 from ..errors import InputError
 from .run import INSTALL_HINT, _args, _error_row, evaluate
@@ -62,6 +66,22 @@ def connect(address: str):
         ) from None
 
 
+@contextmanager
+def _workers_ignore_ctrl_c():
+    """Start the local workers with Ctrl-C ignored (inherited by the processes
+    they spawn): Ctrl-C reaches the whole process group, and each worker
+    printed a KeyboardInterrupt traceback of 20-30 lines after the study's
+    "interrupted" (found by hostile testing).  The study stops them itself."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    old = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, old)
+
+
 def _client(client, workers: int | None, n_tasks: int):
     """(client, things to close): the given client, one connected to an address, or
     a local cluster of ``workers`` processes."""
@@ -73,11 +93,35 @@ def _client(client, workers: int | None, n_tasks: int):
         return client, []
     n = workers if workers is not None else os.cpu_count() or 1
     n = max(1, min(n, n_tasks))
-    cluster = dd.LocalCluster(
-        n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None
-    )
+    with _workers_ignore_ctrl_c():
+        cluster = dd.LocalCluster(
+            n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None
+        )
     c = dd.Client(cluster)
     return c, [c, cluster]
+
+
+def _quiet_worker() -> None:
+    logging.getLogger("distributed").setLevel(logging.CRITICAL + 1)
+
+
+@contextmanager
+def _quiet(c):
+    """No logging from our own cluster while it is torn down after Ctrl-C:
+    its workers logged a warning of 3 lines per cancelled task, and its
+    scheduler (in this process) pages of CRITICAL tracebacks about the
+    client it could no longer tell, after the study's "interrupted"."""
+    here = logging.getLogger("distributed")
+    level = here.level
+    try:
+        c.run(_quiet_worker, wait=True)
+    except Exception:  # the study stops either way
+        pass
+    here.setLevel(logging.CRITICAL + 1)
+    try:
+        yield
+    finally:
+        here.setLevel(level)
 
 
 def run_on_dask(plan, todo, on_row, client, workers) -> int:
@@ -86,6 +130,7 @@ def run_on_dask(plan, todo, on_row, client, workers) -> int:
     c, own = _client(client, workers, len(todo))
     n_workers = len(c.scheduler_info().get("workers", {}))
     futures = []
+    interrupted = False
     try:
         [base] = c.scatter([plan.base], broadcast=True)
         futures = [c.submit(evaluate, *_args(plan, i, base), pure=False, retries=0) for i in todo]
@@ -98,10 +143,14 @@ def run_on_dask(plan, todo, on_row, client, workers) -> int:
                 row = _error_row(plan, sample_of[fut.key], f"task {fut.status}: {exc}")
             fut.release()
             on_row(row)
+    except KeyboardInterrupt:
+        interrupted = True
+        raise
     finally:
-        pending = [f for f in futures if not f.done()]
-        if pending:
-            c.cancel(pending)
-        for thing in own:
-            thing.close()
+        with _quiet(c) if interrupted and own else nullcontext():
+            pending = [f for f in futures if not f.done()]
+            if pending:
+                c.cancel(pending)
+            for thing in own:
+                thing.close()
     return n_workers
