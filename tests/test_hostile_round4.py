@@ -14,6 +14,7 @@ import pytest
 import yaml
 from typer.testing import CliRunner
 
+from _cli import assert_refused
 from rockdem.cli import app
 
 runner = CliRunner()
@@ -90,3 +91,60 @@ def test_ctrl_c_on_a_study_with_local_workers_prints_one_line(tmp_path):
                 proc.wait(timeout=30)
     assert proc.returncode == 130, err
     assert err.strip() == "interrupted", err
+
+
+# ------------------------------------------------------ limit-equilibrium case files
+PLANE = (
+    "height: 30, face_angle: 60, plane_dip: 30, friction_angle: 30, cohesion: 48, unit_weight: 25.5"
+)
+TOPPLING = (
+    "width: 10, step: 1, base_dip: 30, base_friction: 38.15, face_friction: 38.15, unit_weight: 25"
+)
+REGULAR = "n_blocks: 16, crest_block: 10, a1: 5, a2: 5.2"
+
+
+def le_case(folder: Path, case: str, inputs: str) -> Path:
+    path = folder / "case.yaml"
+    path.write_text(f"units: kN, m, kPa\nlimit_equilibrium:\n  {case}: {{{inputs}}}\n")
+    return path
+
+
+@pytest.mark.parametrize(
+    ("case", "inputs", "fragments"),
+    [
+        # OverflowError, exit 1
+        (
+            "plane_failure",
+            PLANE.replace("height: 30", "height: 1e300").replace("25.5", "1e300"),
+            ("plane_failure.height: 1e+300 is beyond 1e+15",),
+        ),
+        # a RuntimeWarning, then "ValueError: The function value at x=100.0 is NaN", exit 1
+        (
+            "toppling",
+            f"heights: [1e300, 1e300], {TOPPLING}",
+            ("toppling.heights: 1e+300 is beyond 1e+15",),
+        ),
+        # ran as 16 blocks, said nowhere
+        (
+            "toppling",
+            f"{REGULAR.replace('16', '16.5')}, {TOPPLING}",
+            ("toppling.n_blocks: 16.5 is not a whole number",),
+        ),
+        # named `heights: needs two or more positive block heights`
+        (
+            "toppling",
+            f"{REGULAR.replace('a1: 5', 'a1: .nan')}, {TOPPLING}",
+            ("toppling.a1: nan is not finite",),
+        ),
+    ],
+)
+def test_a_case_file_value_beyond_the_models_range_names_its_key(tmp_path, case, inputs, fragments):
+    assert_refused(invoke("le", le_case(tmp_path, case, inputs)), "case.yaml: ", *fragments)
+
+
+def test_a_case_file_at_the_edge_of_the_range_still_runs(tmp_path):
+    inputs = PLANE.replace("height: 30", "height: 1e15").replace("25.5", "1e15")
+    r = invoke("le", le_case(tmp_path, "plane_failure", inputs))
+    assert r.exit_code == 0, r.output
+    r = invoke("le", le_case(tmp_path, "toppling", f"{REGULAR}, {TOPPLING}"))
+    assert r.exit_code == 0, r.output

@@ -44,6 +44,9 @@ CASES = ("plane_failure", "toppling", "wedge")
 SECTION = "limit_equilibrium"
 OTHER_KEYS = ("name", "description", "units")
 _REGULAR = ("n_blocks", "crest_block", "a1", "a2")
+#: Largest value of an input, as of any quantity of a model file (found by
+#: hostile testing: a height and unit weight of 1e300 overflowed, exit 1)
+MAX_INPUT = 1e15
 
 
 def is_case_document(data: Any) -> bool:
@@ -114,6 +117,20 @@ def run_case(data: dict, *, source: str = "<case>") -> dict[str, Any]:
                 "is not an argument of this closed form",
                 f"use {', '.join(sorted(allowed))}",
             )
+    for key, value in inputs.items():
+        for v in value if isinstance(value, list) else [value]:
+            if (
+                isinstance(v, int | float)
+                and not isinstance(v, bool)
+                and math.isfinite(v)
+                and abs(v) > MAX_INPUT
+            ):
+                raise _fail(
+                    source,
+                    f"{where}.{key}",
+                    f"{v:g} is beyond {MAX_INPUT:g}, the largest value of any quantity of a model",
+                    "check the units, or give a smaller value",
+                )
     try:
         if case == "plane_failure":
             r = plane_failure(**inputs)
@@ -166,6 +183,13 @@ def _toppling_case(inputs: dict, source: str, where: str) -> dict[str, Any]:
         for key, value in zip(_REGULAR, values, strict=True):
             if isinstance(value, bool) or not isinstance(value, (int, float)):
                 raise _fail(source, f"{where}.{key}", f"{value!r} is not a number", "give a number")
+            if not math.isfinite(value):
+                raise _fail(source, f"{where}.{key}", f"{value} is not finite", "give a number")
+            if key in ("n_blocks", "crest_block") and value != int(value):
+                # (found by hostile testing: n_blocks 16.5 ran as 16, said nowhere)
+                raise _fail(
+                    source, f"{where}.{key}", f"{value:g} is not a whole number", "give a count"
+                )
         inputs["heights"] = stepped_heights(*values, inputs.get("step", 0.0)).tolist()
     heights = inputs.get("heights")
     if not isinstance(heights, list) or not all(
