@@ -148,3 +148,22 @@ def test_a_case_file_at_the_edge_of_the_range_still_runs(tmp_path):
     assert r.exit_code == 0, r.output
     r = invoke("le", le_case(tmp_path, "toppling", f"{REGULAR}, {TOPPLING}"))
     assert r.exit_code == 0, r.output
+
+
+@pytest.mark.parametrize("dip", ["5.0e-324", "1.0e-300", "1.0e-9"])
+def test_a_plane_too_flat_to_reach_the_upper_surface_is_refused(tmp_path, dip):
+    """A subnormal dip divided by zero: two RuntimeWarnings, W = nan and
+    'unbounded' (exit 0); 1e-300 printed a factor of safety of 300 digits."""
+    case = le_case(tmp_path, "plane_failure", PLANE.replace("plane_dip: 30", f"plane_dip: {dip}"))
+    assert_refused(invoke("le", case), "plane_failure.plane_dip: ", "so flat", "steeper")
+
+
+def test_a_flat_passive_plane_holds_the_wedge_without_a_warning(tmp_path):
+    """tan(p2) / tan(5e-324) warned 'divide by zero' on stderr (the answer was right)."""
+    inputs = (
+        "active_weight: 200, passive_weight: 0.5, active_dip: 37, passive_dip: 5.0e-324, "
+        "active_friction: 0, passive_friction: 30, joint_friction: 35"
+    )
+    r = invoke("le", le_case(tmp_path, "wedge", inputs))
+    assert r.exit_code == 0 and r.stderr == "", r.output
+    assert "factor of safety: 0.6376" in r.stdout

@@ -88,10 +88,11 @@ def wedge_fos(w1, w2, d1, d2, p1, p2, p3) -> float:
     def thrust(f):
         return wedge_thrust(w1, w2, d1, d2, *reduced(f))
 
-    single = min(
-        np.tan(np.radians(p1)) / np.tan(np.radians(d1)),
-        np.tan(np.radians(p2)) / np.tan(np.radians(d2)),
-    )
+    with np.errstate(divide="ignore"):  # a flat plane (d2 = 5e-324): the block holds
+        single = min(
+            np.tan(np.radians(p1)) / np.tan(np.radians(d1)),
+            np.tan(np.radians(p2)) / np.tan(np.radians(d2)),
+        )
     from scipy.optimize import brentq  # 0.13 s to import: not at start-up
 
     f = brentq(thrust, 0.2, 5.0, xtol=1e-12)

@@ -110,6 +110,11 @@ class PlaneFailure:
         return dict(self.__dict__)
 
 
+#: longest sliding plane, in heights of the slope (as a model's longest length
+#: is 1e9 of its smallest)
+MAX_PLANE_LENGTH = 1e9
+
+
 def plane_failure(
     *,
     height: float,
@@ -178,6 +183,15 @@ def plane_failure(
     check_number(where, "seismic_kh", seismic_kh, lo=-1.0, hi=1.0)
     check_number(where, "bolt_force", bolt_force, lo=0.0)
     check_number(where, "bolt_angle", bolt_angle, lo=-90.0, hi=90.0)
+    if np.sin(np.radians(psi_p)) * MAX_PLANE_LENGTH < 1:
+        # (found by hostile testing: a dip of 5e-324 divided by zero and read
+        # W = nan, "unbounded"; 1e-300 printed a factor of 300 digits)
+        raise InputError(
+            f"{where} plane_dip",
+            f"{psi_p:g} is so flat that the plane runs more than {MAX_PLANE_LENGTH:g} "
+            "heights to the upper surface",
+            "give a steeper plane",
+        )
     cot_p, cot_f = 1 / np.tan(np.radians(psi_p)), 1 / np.tan(np.radians(psi_f))
     if crack_depth is not None and crack_distance is not None:
         raise InputError(
