@@ -167,3 +167,14 @@ def test_a_flat_passive_plane_holds_the_wedge_without_a_warning(tmp_path):
     r = invoke("le", le_case(tmp_path, "wedge", inputs))
     assert r.exit_code == 0 and r.stderr == "", r.output
     assert "factor of safety: 0.6376" in r.stdout
+
+
+def test_an_unbounded_plane_failure_without_a_bolt_names_no_support_force(tmp_path):
+    """Said 'the support force balances the driving force' with no bolt or support."""
+    case = le_case(tmp_path, "plane_failure", PLANE.replace("height: 30", "height: 1e-300"))
+    r = invoke("le", case)
+    assert r.exit_code == 0, r.output
+    assert "unbounded (nothing drives the block down the plane)" in r.stdout
+    assert "support" not in r.stdout and "bolt" not in r.stdout
+    r = invoke("le", le_case(tmp_path, "plane_failure", f"{PLANE}, bolt_force: 1e6"))
+    assert "the bolt force balances the driving force" in r.stdout, r.output

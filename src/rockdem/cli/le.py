@@ -176,10 +176,10 @@ def _print_case(doc: dict[str, Any]) -> None:
         out.print("plane failure with a tension crack (Hoek & Bray 1981)")
         fs = r["fos"]
         if not math.isfinite(fs):
-            out.print(
-                "factor of safety: unbounded (nothing drives the block down the plane: "
-                "the support force balances the driving force)"
-            )
+            # (a bolt's force, or a weight too small to drive: no bolt is to be named then)
+            bolt = doc["inputs"].get("bolt_force")
+            why = ": the bolt force balances the driving force" if bolt else ""
+            out.print(f"factor of safety: unbounded (nothing drives the block down the plane{why})")
         else:
             out.print(f"factor of safety: [bold]{fs:.4f}[/bold]")
         where = "the face" if r["crack_in_face"] else "the upper surface"
