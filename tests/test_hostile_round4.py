@@ -178,3 +178,29 @@ def test_an_unbounded_plane_failure_without_a_bolt_names_no_support_force(tmp_pa
     assert "support" not in r.stdout and "bolt" not in r.stdout
     r = invoke("le", le_case(tmp_path, "plane_failure", f"{PLANE}, bolt_force: 1e6"))
     assert "the bolt force balances the driving force" in r.stdout, r.output
+
+
+# ------------------------------------------------------------ whole numbers
+@pytest.mark.parametrize(
+    ("extra", "fragment"),
+    [
+        (
+            {"analysis": {"load_steps": 1e30}},
+            "analysis.load_steps: 1e+30 is out of range; give a value >= 1 and <= 1000",
+        ),
+        (
+            {"analysis": {"load_steps": -1e300}},
+            "analysis.load_steps: -1e+300 is out of range; give a value >= 1",
+        ),
+        (
+            {"study": {"samples": 1e30, "inputs": {}}},
+            "study.samples: 1e+30 is out of range; give a value >= 1 and <= 1000000",
+        ),
+    ],
+)
+def test_a_whole_number_beyond_64_bits_is_out_of_range_not_unparsable(tmp_path, extra, fragment):
+    """Said 'Unable to parse input string as an integer, exceeded maximum size',
+    with no range, for any whole-number key written as a float of 20 digits or more."""
+    model = plane_model(tmp_path, **extra)
+    line = assert_refused(invoke("check", model), "plane.yaml:", fragment)
+    assert "parse" not in line

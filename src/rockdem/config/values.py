@@ -91,6 +91,19 @@ def _integer(value: Any) -> Any:
         raise PydanticCustomError(
             "int_type", "expected a whole number, got {value!r}", {"value!r": repr(value)}
         )
+    if isinstance(value, float) and value.is_integer() and abs(value) >= 2**63:
+        # pydantic parses no float beyond 64 bits: "Unable to parse input string as
+        # an integer, exceeded maximum size", with no range (found by hostile
+        # testing: `samples: 1e30`); every whole-number key lies within 64 bits
+        kind, ctx = (
+            ("less_than_equal", {"le": INT64_MAX})
+            if value > 0
+            else (
+                "greater_than_equal",
+                {"ge": INT64_MIN},
+            )
+        )
+        raise PydanticCustomError(kind, "{value} is out of range", {**ctx, "value": value})
     return value
 
 
