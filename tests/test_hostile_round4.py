@@ -204,3 +204,23 @@ def test_a_whole_number_beyond_64_bits_is_out_of_range_not_unparsable(tmp_path, 
     model = plane_model(tmp_path, **extra)
     line = assert_refused(invoke("check", model), "plane.yaml:", fragment)
     assert "parse" not in line
+
+
+# ------------------------------------------------------------ study files
+PHI_STUDY = {
+    "inputs": {"joints.plane.friction_angle": {"distribution": "normal", "mean": 33, "sd": 2}}
+}
+
+
+def test_a_study_file_with_other_keys_names_the_first_with_its_line(tmp_path):
+    """Named the alphabetically first extra key (`analysis` of a whole model
+    file given as --spec), without a line."""
+    model = plane_model(tmp_path)
+    spec = tmp_path / "spec.yaml"
+    spec.write_text(
+        yaml.safe_dump({"study": PHI_STUDY, "units": "kN", "analysis": {}}, sort_keys=False)
+    )
+    r = invoke("study", model, "--spec", spec, "--out", tmp_path / "o", "--workers", "0")
+    assert_refused(r, "spec.yaml:7: units: unknown key", "one `study:` section")
+    assert not (tmp_path / "o").exists()
+

@@ -103,12 +103,13 @@ def prepare(model, spec=None, *, max_blocks: int | None = MAX_BLOCKS) -> Plan:
             doc, study_nodes = read_document(spec)
             study_source = str(spec)
             if set(doc) != {"study"}:
-                extra = sorted(set(doc) - {"study"})
+                extra = [k for k in doc if k != "study"]  # the first as written
                 raise ModelFileError(
                     study_source,
                     extra[0] if extra else "study",
                     "unknown key" if extra else "required key is missing",
                     "a study file holds one `study:` section",
+                    _line(study_nodes, (extra[0],)) if extra else None,
                 )
             study_data = doc["study"]
         elif isinstance(spec, dict):
