@@ -224,3 +224,9 @@ def test_a_study_file_with_other_keys_names_the_first_with_its_line(tmp_path):
     assert_refused(r, "spec.yaml:7: units: unknown key", "one `study:` section")
     assert not (tmp_path / "o").exists()
 
+
+def test_a_sweep_whose_first_point_is_invalid_says_so_not_medians(tmp_path):
+    model = plane_model(tmp_path, study={"sweep": {"analysis.load_steps": {"values": [0, 1]}}})
+    r = invoke("study", model, "--out", tmp_path / "o", "--workers", "0")
+    line = assert_refused(r, "study inputs at their sweep's first values", "analysis.load_steps: 0")
+    assert "medians" not in line

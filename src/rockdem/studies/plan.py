@@ -154,7 +154,8 @@ def prepare(model, spec=None, *, max_blocks: int | None = MAX_BLOCKS) -> Plan:
     if cfg.name is None and isinstance(model, str | os.PathLike):
         data["name"] = Path(model).stem  # as load_model names it
     doc = keypath.apply(data, places, nominal)
-    where = f"{source} (study inputs at their medians)"
+    at = "medians" if parsed.kind == "probabilistic" else "sweep's first values"
+    where = f"{source} (study inputs at their {at})"
     ncfg = validate_document(doc, source=where)
     nominal_model = build_model(ncfg, source=where, max_blocks=max_blocks)
     key = {
