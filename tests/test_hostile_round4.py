@@ -230,3 +230,21 @@ def test_a_sweep_whose_first_point_is_invalid_says_so_not_medians(tmp_path):
     r = invoke("study", model, "--out", tmp_path / "o", "--workers", "0")
     line = assert_refused(r, "study inputs at their sweep's first values", "analysis.load_steps: 0")
     assert "medians" not in line
+
+
+# ------------------------------------------------------------ a drawing for a model
+@pytest.mark.parametrize("command", ["check", "run", "fos", "le", "report", "stabilise"])
+def test_a_dxf_drawing_given_as_the_model_says_how_to_import_it(tmp_path, command):
+    """Said 'the top level is a string, not a mapping of keys; start with keys
+    such as `units:`'."""
+    ezdxf = pytest.importorskip("ezdxf")
+    drawing = tmp_path / "Section.DXF"
+    ezdxf.new().saveas(drawing)
+    args = ["--out", tmp_path / "o"] if command == "report" else []
+    assert_refused(
+        invoke(command, drawing, *args),
+        "Section.DXF: is a DXF drawing, not a model file",
+        "rockdem import",
+    )
+    r = invoke("import", drawing, "--template", drawing)
+    assert_refused(r, "--template", "is a DXF drawing, not a model file")

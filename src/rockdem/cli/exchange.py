@@ -175,6 +175,12 @@ def import_dxf(
         joints = _pairs(joint_layer, "--joint-layer")
         if joints:
             layers["joints"] = joints
+        if template is not None and template.suffix.lower() == ".dxf":
+            raise InputError(
+                f"--template {template}",
+                "is a DXF drawing, not a model file",
+                "give a model file (.yaml or .toml) to take the units, materials and joints from",
+            )
         if out_file is not None:
             if out_file.exists() and out_file.resolve() == Path(path).resolve():
                 raise InputError(
