@@ -838,3 +838,14 @@ def test_an_empty_study_file_is_blamed_not_the_model(tmp_path):
     assert_refused(r, "s.yaml", "study: the section is empty")
     assert "plane.yaml" not in r.output
     assert not (tmp_path / "o").exists()
+
+
+def test_an_empty_spec_file_asks_for_a_study_not_a_model(tmp_path):
+    """An empty --spec file said "write a model (see `rockdem example list`)",
+    the model file's advice (found by hostile testing)."""
+    model = write_model(tmp_path, None)
+    spec = tmp_path / "spec.yaml"
+    spec.write_text("")
+    r = invoke("study", model, "--spec", spec, "--out", tmp_path / "out", "--workers", "0")
+    said = assert_refused(r, "spec.yaml", "the file is empty", "write a `study:` section")
+    assert "example list" not in said

@@ -100,7 +100,15 @@ def prepare(model, spec=None, *, max_blocks: int | None = MAX_BLOCKS) -> Plan:
         parsed = spec
     else:
         if isinstance(spec, str | os.PathLike):
-            doc, study_nodes = read_document(spec)
+            try:
+                doc, study_nodes = read_document(spec)
+            except ModelFileError as exc:
+                if exc.problem != "the file is empty":
+                    raise
+                # (the model file's advice, "write a model", is wrong here)
+                raise ModelFileError(
+                    str(spec), "", exc.problem, "write a `study:` section (docs/file-format.md)"
+                ) from None
             study_source = str(spec)
             if set(doc) != {"study"}:
                 extra = [k for k in doc if k != "study"]  # the first as written
