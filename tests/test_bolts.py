@@ -358,7 +358,7 @@ def test_a_bolt_far_stiffer_than_the_joint_it_crosses_is_refused(tmp_path):
     "strength-independent failure"; on the block on a plane 2.5e5 x read
     1.771 and 2.5e6 x 1.50 against the closed form 1.7833.  Up to the limit,
     1e4 x, the closed form holds."""
-    from rockdem.bolts import BOLT_STIFFNESS_CONTRAST_MAX
+    from rockdem.bolt_placement import BOLT_STIFFNESS_CONTRAST_MAX
     from rockdem.config import ModelFileError, parse_model
 
     stiff = 2.5e3 * 1e6 * WIDTH  # 2,500 x the 4 m base's kn x length

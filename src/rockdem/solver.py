@@ -34,7 +34,8 @@ import scipy.sparse as sp
 
 from .assembly import Assembly, build_assembly
 from .blocks import Blocks
-from .bolts import Crossings, check_bolt_stiffness, place_bolts
+from .bolt_placement import check_bolt_stiffness, place_bolts
+from .bolts import Crossings
 from .errors import InputError
 from .interfaces import Interfaces, assign_joints, check_held, find_interfaces
 from .joints import check_stiffness_contrast

@@ -13,7 +13,7 @@ import numpy as np
 import shapely
 from shapely.ops import nearest_points
 
-from ..bolts import bolts_left_in_rock
+from ..bolt_placement import bolts_left_in_rock
 from ..errors import InputError
 from ..loads import loads_left_on_rock
 from ..model import Model
@@ -40,7 +40,7 @@ def _geometry(model: Model):
 def _back(model: Model, geom) -> Model:
     """The edited geometry as a model with ``model``'s settings and name, and
     its loads and bolts as far as they are left on the rock (see
-    :func:`rockdem.loads.loads_left_on_rock`, :func:`rockdem.bolts.bolts_left_in_rock`)."""
+    :func:`rockdem.loads.loads_left_on_rock`, :func:`rockdem.bolt_placement.bolts_left_in_rock`)."""
     out = geom.model(settings=model.settings, name=model.name)
     loads, _ = loads_left_on_rock(out.blocks, model.loads)
     out = out.replace(loads=loads)
