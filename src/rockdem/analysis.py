@@ -27,7 +27,7 @@ from .relaxation import TOLERANCE as RELAXATION_TOLERANCE
 from .relaxation import confirm_failed_analysis
 from .results import Analysis, Evidence, Step, tabulate
 from .solver import KINKED, Solve, System, build_system, newton, residual
-from .spring_law import SpringState, commit
+from .spring_law import SpringState, commit, widest_openings_first
 
 log = logging.getLogger(__name__)
 
@@ -76,7 +76,7 @@ def _settle(
         if not sol.converged:
             break
         dn, ds = system.assembly.relative_displacement(sol.q)
-        response, deferred = _widest_openings_first(system, state, sol.response, dn)
+        response, deferred = widest_openings_first(system.springs, state, sol.response, dn)
         new_state = commit(system.springs, state, response, ds, stage)
         if system.bolts is not None:  # bolts that reached their capacity, and when
             yielded = system.bolts.forces(sol.q, new_state.bolt_reference)[2]
@@ -115,40 +115,6 @@ def _settle(
         sol.relaxation,
     )
     return out, state
-
-
-#: of the bonded spring points that opened in one solve, those opened less
-#: than this share of the widest are broken only if they are still open
-#: once the wider ones have lost their bond and the loads have moved
-STAGGER = 0.5
-
-
-def _widest_openings_first(system, state, response, dn):
-    """``response`` with only the widest new tension failures marked open,
-    and whether any were deferred.
-
-    A cohesive point that opens keeps its shear strength until its failure
-    is committed, so every point open at the end of a solve is judged with
-    the bond of the others still on: a tension crack in a slope face, open
-    and still carrying its cohesion in shear, left the base point below it
-    at zero stress, and both were broken together; the base point, the most
-    compressed of the plane once the crack had lost its bond, never got its
-    cohesion back (Hoek & Bray's crack in the face with 3 m of water: FS
-    0.66-0.76 for 0.815).  So the bonds break widest opening first, as
-    events: the others are re-judged after the loads have moved.
-    """
-    springs = system.springs
-    bonded = (springs.cohesion > 0) | (springs.tensile > 0)
-    new = response.open & ~state.broken & bonded
-    if not new.any():
-        return response, False
-    with np.errstate(divide="ignore", invalid="ignore"):
-        opening = dn - np.where(springs.kn > 0, springs.tensile / springs.kn, 0.0)
-    widest = float(np.max(opening[new]))
-    later = new & (opening < STAGGER * widest)
-    if widest <= 0 or not later.any():
-        return response, False
-    return replace(response, open=response.open & ~later), True
 
 
 def _evidence(sol: Solve) -> Evidence:
