@@ -100,16 +100,19 @@ def test_pretension_acts_at_once_like_an_anchor_force():
     assert fos.value == pytest.approx(bolted_fos(20.0, 30.0), rel=0.005)
 
 
-def test_cable_carries_no_compression():
-    """Pointing down-dip, sliding shortens the cable: it adds nothing, FS = tan phi / tan psi."""
-    model = block_with_bolt(30.0, kind="cable")
+def _pointing_down_dip(model):
+    """``block_with_bolt``'s model (theta 30) with its bolt line turned to
+    point down-dip: through the base from the other side."""
     b = model.bolts[0]
-    # the same bolt line turned to point down-dip: through the base from the other side
     R = V._rot(-PSI)
     t = np.radians(30.0)
     head = R @ np.array([WIDTH / 2 - HEIGHT * np.cos(t) / np.sin(t), HEIGHT])
-    flipped = Bolt(**{**b.__dict__, "head": tuple(head), "angle": -30.0 - PSI})
-    fos = rd.factor_of_safety(model.replace(bolts=[flipped]))
+    return model.replace(bolts=[Bolt(**{**b.__dict__, "head": tuple(head), "angle": -30.0 - PSI})])
+
+
+def test_cable_carries_no_compression():
+    """Pointing down-dip, sliding shortens the cable: it adds nothing, FS = tan phi / tan psi."""
+    fos = rd.factor_of_safety(_pointing_down_dip(block_with_bolt(30.0, kind="cable")))
     exact = np.tan(np.radians(PHI)) / np.tan(np.radians(PSI))
     assert fos.value == pytest.approx(exact, rel=0.005)
 
@@ -422,13 +425,9 @@ def test_a_bolt_shortened_by_the_sliding_is_reported_in_compression():
     compression at capacity read as the largest force -99 kN)."""
     from rockdem.result_tables import bolt_summary
 
-    model = block_with_bolt(30.0)
+    model = _pointing_down_dip(block_with_bolt(30.0))
     b = model.bolts[0]
-    R = V._rot(-PSI)
-    t = np.radians(30.0)
-    head = R @ np.array([WIDTH / 2 - HEIGHT * np.cos(t) / np.sin(t), HEIGHT])
-    flipped = Bolt(**{**b.__dict__, "head": tuple(head), "angle": -30.0 - PSI})
-    fos = rd.factor_of_safety(model.replace(bolts=[flipped]))
+    fos = rd.factor_of_safety(model)
     (row,) = bolt_summary(fos.stable_analysis)
     assert row["max_axial_force"] < -0.5 * b.capacity  # near its capacity, pushing
     # of a bolt's crossings, the force of largest magnitude, with its sign
