@@ -511,3 +511,16 @@ def test_a_bolt_to_go_in_after_loads_the_slope_cannot_carry_is_never_installed()
         a = rd.analyse(model)
     assert not a.stable
     assert rd.analyse(block_with_bolt(30.0, name="B7")).stable  # in from the start, it holds
+    # the factor of safety is the unbolted slope's, and says why (it read 0.9986:
+    # the bolt installed in a stronger trial slope that stands, found in review)
+    with pytest.warns(rd.ModelWarning, match="B7 .* were never installed"):
+        fos = rd.factor_of_safety(model)
+    unbolted = np.tan(np.radians(PHI)) / np.tan(np.radians(PSI))
+    assert fos.value == pytest.approx(unbolted, rel=0.005)
+    # nor do Sarma's bodies carry it, or its pretension (they read 1.527)
+    from rockdem.limit_equilibrium import sarma
+
+    tensioned = block_with_bolt(30.0, installed="after_loads", name="B7", pretension=25.0)
+    with pytest.warns(rd.ModelWarning, match="never installed"):
+        failed = rd.analyse(tensioned)
+    assert sarma(failed).fos == pytest.approx(unbolted, rel=0.005)

@@ -105,3 +105,32 @@ def test_consistent_tangent_matches_finite_differences():
         _, r2 = residual(system, q + d, state, 1.0, 1.0)
         # r = f - f_int, so dr = -J d (away from kinks the law is linear)
         assert np.linalg.norm((r2 - r) + J @ d) <= 1e-6 * np.linalg.norm(J @ d)
+
+
+def test_tension_breaks_widest_opening_beyond_the_strength_in_force_first():
+    """Of two bonded points open at the end of a solve, the one opened
+    farther beyond its tensile strength as it stands (here divided by a
+    strength-reduction factor of 2) breaks first; the other is re-judged
+    after the loads have moved.  (Measured against the peak strength, the
+    order reversed: A, 4e-5 beyond its reduced strength, was deferred
+    behind B, 1e-6 beyond.)"""
+    from types import SimpleNamespace
+
+    from rockdem.spring_law import Response, widest_openings_first
+
+    kn = np.array([1e6, 1e6, 1e6])
+    springs = SimpleNamespace(kn=kn)
+    from dataclasses import replace
+
+    state = replace(SpringState.initial(3), broken=np.array([False, False, True]))
+    tensile = np.array([100.0, 0.0, 0.0]) / 2.0  # A: T 100 at F = 2; B: T 0, cohesive
+    cohesion = np.array([10.0, 10.0, 0.0]) / 2.0
+    dn = np.array([9e-5, 1e-6, 1e-3])  # C: broken already, wide open
+    zero = np.zeros(3)
+    response = Response(zero, zero, zero, kn * dn > tensile, zero > 0, zero, zero, zero)
+    out, deferred = widest_openings_first(springs, state, response, dn, (cohesion, zero, tensile))
+    assert deferred and out.open.tolist() == [True, False, True]
+    # one point open: nothing deferred, the response as it was
+    alone = Response(zero, zero, zero, np.array([False, True, False]), zero > 0, zero, zero, zero)
+    same, deferred = widest_openings_first(springs, state, alone, dn, (cohesion, zero, tensile))
+    assert not deferred and same is alone

@@ -482,3 +482,61 @@ def test_bolts_installed_after_the_loads_go_through_the_stages():
     # the carried reference is the stage-0 displacement of that crossing
     assert after.state.bolt_reference[0] == pytest.approx(before.state.bolt_reference[0])
     assert abs(after.bolts.axial_force[0]) < 0.01  # block 1 barely moved: below capacity
+
+
+def test_a_bolt_keeps_its_installation_through_a_stage_that_trims_its_joint():
+    """A block on a 35 degree plane (phi 30) propped by a toe block and held
+    by a bolt put in after the loads: taking the toe loads the bolt (7.5);
+    trimming the block's toe corner then moves the ends of the base the bolt
+    crosses.  Matched by its two blocks, the crossing keeps where it was
+    installed: the block stays where it was, as with a bolt in from the
+    start (it was installed again at the trim, and slid twice as far to
+    load it anew; found in review)."""
+    a = np.radians(-35)
+    R = np.array([[np.cos(a), -np.sin(a)], [np.sin(a), np.cos(a)]])
+
+    def rot(pts):
+        return [tuple(R @ np.array(p, float)) for p in pts]
+
+    blocks = rd.Blocks.from_polygons(
+        [rot([(-10, -5), (10, -5), (10, 0), (-10, 0)]), rot([(0, 0), (3, 0), (3, 1), (0, 1)]),
+         rot([(3, 0), (4, 0), (4, 1), (3, 1)])],
+        fixed=[True, False, False], unit_weight=25,
+    )  # fmt: skip
+    t = np.radians(60)
+    head = R @ np.array([1.5 + np.cos(t) / np.sin(t), 1.0])
+    bolt = rd.Bolt(head=tuple(head), angle=205.0, length=1 / np.sin(t) + 2, capacity=80,
+                   axial_stiffness=1e4, installed="after_loads", name="B")  # fmt: skip
+    joints = [rd.Joint(normal_stiffness=1e6, friction_angle=30, name="j"),
+              rd.Joint(normal_stiffness=1e6, friction_angle=60, name="s")]  # fmt: skip
+    under_toe = np.array([rot([(3.0, 0), (4.0, 0)])])
+    model = rd.Model(blocks, joints, joint_lines=under_toe, line_joint=[1], bolts=[bolt])
+    trim = rot([(2.8, -0.5), (3.5, -0.5), (3.5, 0.3), (2.8, 0.3)])
+    ex = excavate_in_stages(model, [Stage("toe", blocks=(2,)), Stage("trim", regions=(trim,))])
+    toe, trimmed = ex.stages[1].analysis, ex.stages[2].analysis
+    assert trimmed.stable and toe.bolts.axial_force[0] == pytest.approx(7.548, rel=0.01)
+    assert trimmed.bolts.axial_force[0] == pytest.approx(toe.bolts.axial_force[0], rel=0.05)
+    moved = np.hypot(*(trimmed.displacement[1, :2] - toe.displacement[1, :2]))
+    assert moved < 0.1 * np.hypot(*toe.displacement[1, :2])
+
+
+def test_a_load_left_only_on_the_fixed_ground_goes_with_the_rock():
+    """A surcharge from the fixed crest onto a free block (allowed: part of
+    it on the ground): removing the block left it on the ground alone, which
+    carries nothing, and the stage stopped with "acts only on fixed blocks"
+    (found in review).  It goes with the block's rock."""
+    from rockdem.model import LineLoad
+
+    ground = [(-2, -1), (6, -1), (6, 1), (4, 1), (4, 0), (-2, 0)]
+    blocks = rd.Blocks.from_polygons(
+        [ground, [(0, 0), (2, 0), (2, 1), (0, 1)], [(2, 0), (4, 0), (4, 1), (2, 1)]],
+        fixed=[True, False, False],
+        unit_weight=20,
+    )
+    crest = LineLoad((2, 1), (6, 1), 0.0, -10.0, name="crest")
+    model = rd.Model(
+        blocks, rd.Joint(normal_stiffness=1e6, friction_angle=40), loads=rd.Loads(lines=(crest,))
+    )
+    with pytest.warns(rd.ModelWarning, match=r"stage 1 \(cut\): crest removed with its rock"):
+        ex = excavate_in_stages(model, [Stage("cut", blocks=(2,))])
+    assert ex.stages[1].analysis.stable and ex.stages[1].model.loads.lines == ()

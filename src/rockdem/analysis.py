@@ -27,7 +27,7 @@ from .relaxation import TOLERANCE as RELAXATION_TOLERANCE
 from .relaxation import confirm_failed_analysis
 from .results import Analysis, Evidence, Step, tabulate
 from .solver import KINKED, Solve, System, build_system, newton, residual
-from .spring_law import SpringState, commit, widest_openings_first
+from .spring_law import SpringState, commit, strength, widest_openings_first
 
 log = logging.getLogger(__name__)
 
@@ -76,7 +76,10 @@ def _settle(
         if not sol.converged:
             break
         dn, ds = system.assembly.relative_displacement(sol.q)
-        response, deferred = widest_openings_first(system.springs, state, sol.response, dn)
+        in_force = strength(system.springs, state, factor, system.model.settings.reduce_tensile)
+        response, deferred = widest_openings_first(
+            system.springs, state, sol.response, dn, in_force
+        )
         new_state = commit(system.springs, state, response, ds, stage)
         if system.bolts is not None:  # bolts that reached their capacity, and when
             yielded = system.bolts.forces(sol.q, new_state.bolt_reference)[2]
@@ -294,6 +297,7 @@ def analyse(
     start: tuple[float, float, np.ndarray] | None = None,
     prove_first: bool = True,
     show_mechanism: bool = True,
+    install_bolts: bool = True,
 ) -> Analysis:
     """Apply the loads in steps and find equilibrium, or the failure mechanism.
 
@@ -321,6 +325,12 @@ def analyse(
         The factor-of-safety search defers it: it shows the mechanism of its
         last failed trial, which is rarely this analysis (a 2,952-block
         slope failing under gravity: 1.6 s of a 9.4 s search).
+    install_bolts : bool
+        Put the bolts that go in after the loads (``installed: after_loads``)
+        into the slope once it stands under them.  The factor-of-safety
+        search turns it off where the slope did not stand at the factor
+        asked: there the bolts never go in (a stronger trial slope that
+        stands is not the slope they would be installed in).
 
     Returns
     -------
@@ -398,7 +408,7 @@ def analyse(
             return replace(
                 _limit_contacts(system, failed, state, q, lam_prev), unloaded_limit=limit
             )
-    if state.bolts_waiting:  # the slope stands under its loads: the late bolts go in
+    if state.bolts_waiting and install_bolts:  # the slope stands: the late bolts go in
         sol, state, q = _install_bolts(system, sol, state, q, lam_prev, strength_factor, k)
     done = _package(system, sol, state, lam_prev, strength_factor, True, steps, q)
     text = large_displacement(done)

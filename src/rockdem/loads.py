@@ -419,18 +419,20 @@ def loads_left_on_rock(blocks: Blocks, loads: Loads) -> tuple[Loads, tuple[str, 
         force = np.array([p.fx, p.fy], dtype=float)
         unit = force / max(float(np.hypot(*force)), 1e-300)
         probe = shapely.points(np.array([p.x, p.y]) + step * unit)
-        if len(tree.query(probe, predicate="intersects")):
+        if not blocks.fixed[tree.query(probe, predicate="intersects")].all():
             points.append(p)
-        else:
+        else:  # (on the fixed ground alone it would push nothing: refused)
             notes.append(f"{p.name or f'point load {i}'} removed with its rock")
     lines = []
     for i, line in enumerate(loads.lines):
-        parts = _parts_on_rock(polys, tree, line, step, blocks.tolerance)
+        parts, on_free = _parts_on_rock(polys, tree, line, step, blocks)
         name = line.name or f"line load {i}"
         if parts == [(0.0, 1.0)]:
             lines.append(line)
             continue
-        if not parts:
+        if not parts or not on_free:
+            # (a surcharge from the fixed crest onto removed rock: what is left
+            # would push only the ground, which carries nothing; found in review)
             notes.append(f"{name} removed with its rock")
             continue
         p0, p1 = np.asarray(line.start, float), np.asarray(line.end, float)
@@ -451,16 +453,20 @@ def loads_left_on_rock(blocks: Blocks, loads: Loads) -> tuple[Loads, tuple[str, 
     return replace(loads, points=tuple(points), lines=tuple(lines)), tuple(notes)
 
 
-def _parts_on_rock(polys, tree, line, step: float, tol: float) -> list[tuple[float, float]]:
+def _parts_on_rock(polys, tree, line, step: float, blocks: Blocks):
     """The fractions ``[(t0, t1), ...]`` of a line load's length that push
-    into a block (merged where they meet; ``[(0, 1)]``: all of it)."""
+    into a block (merged where they meet; ``[(0, 1)]``: all of it), and
+    whether some of it pushes into a free block."""
+    tol = blocks.tolerance
     p0, p1 = np.asarray(line.start, float), np.asarray(line.end, float)
     length = float(np.hypot(*(p1 - p0)))
     q = line.traction(np.array([0.5]))[0]
     shift = step * q / max(float(np.hypot(*q)), 1e-300)
     seg = shapely.LineString([p0 + shift, p1 + shift])
-    pieces = shapely.intersection(polys[tree.query(seg, predicate="intersects")], seg)
-    pieces = shapely.get_parts(pieces)  # (a concave block: in and out again)
+    hit = tree.query(seg, predicate="intersects")
+    whole = shapely.intersection(polys[hit], seg)
+    on_free = bool(np.any((shapely.length(whole) > tol) & ~blocks.fixed[hit]))
+    pieces = shapely.get_parts(whole)  # (a concave block: in and out again)
     spans = []
     for xy in map(shapely.get_coordinates, pieces):
         if len(xy) < 2:
@@ -474,5 +480,5 @@ def _parts_on_rock(polys, tree, line, step: float, tol: float) -> list[tuple[flo
         elif (t1 - t0) * length > tol:
             merged.append([t0, t1])
     if len(merged) == 1 and merged[0][0] * length <= tol and (1 - merged[0][1]) * length <= tol:
-        return [(0.0, 1.0)]
-    return [(t0, t1) for t0, t1 in merged]
+        return [(0.0, 1.0)], on_free
+    return [(t0, t1) for t0, t1 in merged], on_free

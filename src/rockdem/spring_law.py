@@ -199,7 +199,7 @@ def commit(
 STAGGER = 0.5
 
 
-def widest_openings_first(springs: Springs, state: SpringState, response: Response, dn):
+def widest_openings_first(springs: Springs, state: SpringState, response: Response, dn, strengths):
     """``response`` with only the widest new tension failures marked open,
     and whether any were deferred.
 
@@ -212,13 +212,16 @@ def widest_openings_first(springs: Springs, state: SpringState, response: Respon
     cohesion back (Hoek & Bray's crack in the face with 3 m of water: FS
     0.66-0.76 for 0.815).  So the bonds break widest opening first, as
     events: the others are re-judged after the loads have moved.
+    ``strengths``: :func:`strength` of ``state`` at the factor of the solve
+    (the opening is measured beyond the tensile strength in force there).
     """
-    bonded = (springs.cohesion > 0) | (springs.tensile > 0)
+    c, _, tensile = strengths  # in force now: divided by the trial factor, or residual
+    bonded = (c > 0) | (tensile > 0)
     new = response.open & ~state.broken & bonded
     if not new.any():
         return response, False
     with np.errstate(divide="ignore", invalid="ignore"):
-        opening = dn - np.where(springs.kn > 0, springs.tensile / springs.kn, 0.0)
+        opening = dn - np.where(springs.kn > 0, tensile / springs.kn, 0.0)
     widest = float(np.max(opening[new]))
     later = new & (opening < STAGGER * widest)
     if widest <= 0 or not later.any():

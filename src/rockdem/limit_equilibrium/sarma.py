@@ -327,7 +327,8 @@ def _bolt_forces(system, analysis) -> np.ndarray:
     asm, free = system.assembly, ~system.blocks.fixed
     q = np.zeros(asm.n_dof)
     q[asm.dof[free].ravel()] = analysis.displacement[free].ravel()
-    pull = -system.bolts.internal_force(q)  # on the blocks, as the springs' resistance
+    # on the blocks (the springs' resistance), from where each was installed
+    pull = -system.bolts.internal_force(q, analysis.state.bolt_reference)
     out[free] = pull[asm.dof[free][:, :2]]
     return out
 

@@ -188,22 +188,33 @@ def _carry_bolts(old: System, state: SpringState, new: System, matched: dict):
     # the same Bolt objects (a removal drops some: positions shift)
     position = {id(b): k for k, b in enumerate(new.model.bolts)}
     renumber = [position.get(id(b), -1) for b in old.model.bolts]
-    before = {
-        (renumber[b], int(i)): int(f)
-        for b, i, f in zip(old.bolts.bolt, old.bolts.interface, state.bolt_first_yield, strict=True)
-    }
     where = {
         (renumber[b], int(i)): c
         for c, (b, i) in enumerate(zip(old.bolts.bolt, old.bolts.interface, strict=True))
     }
+    # a crossing of an interface the stage trimmed (its end points moved) is
+    # still the same bolt across the same two blocks (found in review: a bolt
+    # put in after the loads was installed again at the stage, and its force
+    # had to be mobilised anew)
+    by_pair: dict = {}
+    for (b, i), c in where.items():
+        key = (b, _pair(old, i))
+        by_pair[key] = None if key in by_pair else c  # (ambiguous: not matched)
     for c, (b, i) in enumerate(zip(new.bolts.bolt, new.bolts.interface, strict=True)):
         j = matched.get(int(i))
-        if j is not None:
-            first[c] = before.get((int(b), j), -1)
-            k = where.get((int(b), j))
-            if k is not None and state.bolt_reference is not None and reference is not None:
-                reference[c] = state.bolt_reference[k]
+        k = where.get((int(b), j)) if j is not None else by_pair.get((int(b), _pair(new, i)))
+        if k is None:
+            continue
+        first[c] = int(state.bolt_first_yield[k])
+        if state.bolt_reference is not None and reference is not None:
+            reference[c] = state.bolt_reference[k]
     return first, reference
+
+
+def _pair(system: System, interface: int) -> frozenset:
+    """The ids of the two blocks of an interface."""
+    faces, ids = system.interfaces, system.blocks.ids
+    return frozenset((int(ids[faces.block_a[interface]]), int(ids[faces.block_b[interface]])))
 
 
 def _carry_q(old: System, disp: np.ndarray, new: System) -> np.ndarray:
