@@ -104,6 +104,15 @@ def _settle(
         )
         iterations += sol.iterations
         history += sol.residuals
+    else:
+        if sol.converged:  # (never seen: bonds breaking widest first add rounds)
+            warnings.warn(
+                ModelWarning(
+                    f"the failures at load step {stage} kept spreading for {MAX_CASCADE} "
+                    "rounds of redistribution; the last round's failures are not committed"
+                ),
+                stacklevel=2,
+            )
     out = Solve(
         sol.converged,
         sol.q,
