@@ -640,6 +640,10 @@ def test_bolts_are_passive_bolts_or_anchors_pulling_from_the_face(tmp_path):
     (bolt,) = model.bolts
     assert tuple(bolt.head) == head and bolt.capacity == 150
     assert bolt.angle == pytest.approx(angle) and bolt.length == pytest.approx(math.hypot(6, 1.6))
+    assert bolt.installed == "before_loads"
+    later = passive.replace("1.0e+5}", "1.0e+5, installed: after_loads}")
+    (tmp_path / "model.yaml").write_text(later)
+    assert load_model(tmp_path / "model.yaml")[0].bolts[0].installed == "after_loads"
     # the imported file says the same
     r = invoke("import", dxf, "--bolt-capacity", "150", "--bolt-stiffness", "1e5")
     assert r.exit_code == 0, r.stderr

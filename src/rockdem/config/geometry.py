@@ -56,6 +56,9 @@ class DxfBoltSpec(_Section):
     """Out-of-plane spacing of the bolt row."""
     kind: Literal["bolt", "cable"] = "bolt"
     """`cable`: no compression and no dowel action."""
+    installed: Literal["before_loads", "after_loads"] = "before_loads"
+    """When the drawn bolts go in: with the loads, or into the slope standing
+    under them (see `bolts[i]`)."""
 
 
 class GeometrySpec(_Section):

@@ -125,6 +125,9 @@ class BoltPatternSpec(_Section):
     """Grout bond force per unit length (null: the steel yields first)."""
     kind: Literal["bolt", "cable"] = "bolt"
     """`cable`: no compression and no dowel action."""
+    installed: Literal["before_loads", "after_loads"] = "before_loads"
+    """When the bolts go in: with the loads, or into the slope standing under
+    them (see `bolts[i]`; a slope that fails under its loads needs `before_loads`)."""
 
 
 class StageSpec(_Section):

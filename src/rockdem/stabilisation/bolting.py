@@ -150,6 +150,7 @@ def bolt_pattern(
     anchorage: float | None = None,
     bond_strength: float = np.inf,
     kind: str = "bolt",
+    installed: str = "before_loads",
     width: float = 0.01,
 ) -> BoltPattern:
     """Widest spacing of bolt rows on the critical mechanism's face that
@@ -157,7 +158,7 @@ def bolt_pattern(
 
     Parameters
     ----------
-    capacity, axial_stiffness, bond_strength, kind :
+    capacity, axial_stiffness, bond_strength, kind, installed :
         The bolt (:class:`rockdem.bolts.Bolt`).
     angle : float
         Direction from the head into the rock (195: 15 degrees below
@@ -183,6 +184,7 @@ def bolt_pattern(
         axial_stiffness=axial_stiffness,
         bond_strength=bond_strength,
         kind=kind,
+        installed=installed,
     )
     tried = ROW_COUNTS if row_spacing is None else (None,)
     count = 0
