@@ -524,3 +524,25 @@ def test_a_bolt_to_go_in_after_loads_the_slope_cannot_carry_is_never_installed()
     with pytest.warns(rd.ModelWarning, match="never installed"):
         failed = rd.analyse(tensioned)
     assert sarma(failed).fos == pytest.approx(unbolted, rel=0.005)
+
+
+def test_the_failure_picture_of_a_search_shows_the_bolts_at_the_limit():
+    """The factor of safety's failure picture coloured the bolt crossings by
+    the failed trial's own start (the gravity state: a bolt at 99% of its
+    capacity at the limit was drawn at 14%); it shows them at the last
+    equilibrium below the limit, as `rockdem fos` lists them."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from matplotlib import colormaps
+
+    from rockdem import plots
+    from rockdem.plots.bolts import UTILISATION_CMAP
+
+    fos = rd.factor_of_safety(block_with_bolt(30.0))
+    at_limit = fos.stable_analysis.bolts.utilisation
+    assert at_limit[0] > 0.9 and fos.failed_analysis.bolts.utilisation[0] < 0.9 * at_limit[0]
+    ax = plots.plot_failure(fos)
+    (dots,) = [c for c in ax.collections if c.get_gid() == "bolt-crossings"]
+    expected = colormaps[UTILISATION_CMAP](np.clip(at_limit, 0, 1))
+    assert dots.get_facecolors()[:, :3] == pytest.approx(expected[:, :3])

@@ -180,7 +180,11 @@ def plot_failure(
         else _draw_history(ax, seg, a.interfaces.state if frame.final else frame.interface_state)
     )
     if frame.final and system.bolts is not None:
-        handles += draw_bolt_forces(ax, a)
+        # the bolts at the last equilibrium below the limit, as `rockdem fos`
+        # lists them (the failed trial's own state is its start: the gravity
+        # state or a trial far below the limit, with the bolts barely loaded)
+        held = fos.stable_analysis if fos is not None else None
+        handles += draw_bolt_forces(ax, held if held is not None else a)
     tails = np.zeros((0, 2))
     supports = tuple(p for p in system.model.loads.points if p.support)
     if supports:  # the support forces the state carries

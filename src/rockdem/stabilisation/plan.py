@@ -271,8 +271,12 @@ def trial_picture(trial, original: Model, target: float, *, ax=None, title: str 
     else:
         shown = trial.fos.failed_analysis or trial.fos.stable_analysis
     if title is None:
+        import textwrap
+
+        # (a label naming the loads the removal took ran off the picture)
+        label = textwrap.fill(f"trial {trial.number}: {trial.label}", 70)
         title = (
-            f"trial {trial.number}: {trial.label}\n{len(trial.removed_blocks)} blocks "
+            f"{label}\n{len(trial.removed_blocks)} blocks "
             f"removed (area {trial.removed_area:.2f}), FS {describe(trial.fos)}, "
             f"target {target:g}\nstate shown at F = {format_factor(shown.strength_factor)}"
         )
