@@ -248,3 +248,14 @@ def test_a_dxf_drawing_given_as_the_model_says_how_to_import_it(tmp_path, comman
     )
     r = invoke("import", drawing, "--template", drawing)
     assert_refused(r, "--template", "is a DXF drawing, not a model file")
+
+
+def test_a_dxf_drawing_given_as_a_study_spec_says_it_is_a_drawing(tmp_path):
+    """`--spec section.dxf` said 'the top level is a string' (the hostile
+    round's leftover)."""
+    ezdxf = pytest.importorskip("ezdxf")
+    drawing = tmp_path / "spec.dxf"
+    ezdxf.new().saveas(drawing)
+    model = plane_model(tmp_path)
+    r = invoke("study", model, "--spec", drawing, "--out", tmp_path / "o", "--workers", "0")
+    assert_refused(r, "spec.dxf: is a DXF drawing, not a model file")

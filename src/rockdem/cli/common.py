@@ -278,14 +278,6 @@ def _model_path(model: Path | None, example: str | None) -> Path:
             "give either a model file or --example NAME" + (", not both" if model else ""),
             "see `rockdem example list`",
         )
-    if model is not None and model.suffix.lower() == ".dxf":
-        # (found by hostile testing: "the top level is a string, not a mapping of keys")
-        raise InputError(
-            f"MODEL {model}",
-            "is a DXF drawing, not a model file",
-            f"make one with `rockdem import {model} --out model.yaml`, or name the drawing "
-            f"in a model file (`geometry: {{dxf: {model.name}}}`)",
-        )
     return example_path(example) if example is not None else model
 
 

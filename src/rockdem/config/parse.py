@@ -57,6 +57,14 @@ def read_document(path: str | Path) -> tuple[dict, Any]:
     """
     path = Path(path)
     source = str(path)
+    if path.suffix.lower() == ".dxf":  # (a study's --spec said "the top level is a string")
+        raise ModelFileError(
+            source,
+            "",
+            "is a DXF drawing, not a model file",
+            f"make a model of it with `rockdem import {path.name} --out model.yaml`, or name "
+            f"it in a model file (`geometry: {{dxf: {path.name}}}`)",
+        )
     raw = read_bounded(path, source)
     try:
         text = raw.decode("utf-8-sig")
