@@ -139,7 +139,7 @@ def le_case(folder: Path, case: str, inputs: str) -> Path:
     ],
 )
 def test_a_case_file_value_beyond_the_models_range_names_its_key(tmp_path, case, inputs, fragments):
-    assert_refused(invoke("le", le_case(tmp_path, case, inputs)), "case.yaml: ", *fragments)
+    assert_refused(invoke("le", le_case(tmp_path, case, inputs)), "case.yaml:3: ", *fragments)
 
 
 def test_a_case_file_at_the_edge_of_the_range_still_runs(tmp_path):

@@ -455,8 +455,19 @@ def test_le_bad_input_is_one_line_and_exit_2(tmp_path, text, fragment):
     r = _le("case.yaml", cwd=tmp_path)
     assert r.returncode == 2, (r.stdout, r.stderr)
     lines = r.stderr.strip().splitlines()
-    assert len(lines) == 1 and lines[0].startswith("error: case.yaml: "), r.stderr
+    # the file, the line of the key (none named one before) and the key
+    assert len(lines) == 1 and re.match(r"error: case\.yaml:\d+: ", lines[0]), r.stderr
     assert fragment in lines[0] and "Traceback" not in r.stderr
+
+
+def test_le_names_the_line_of_the_bad_key(tmp_path):
+    text = TOPPLING_CASE.replace("base_friction: 38.15", "base_friction: 0")
+    (tmp_path / "case.yaml").write_text(text)
+    line = 1 + text.splitlines().index(
+        next(t for t in text.splitlines() if "base_friction" in t)
+    )
+    r = _le("case.yaml", cwd=tmp_path)
+    assert f"error: case.yaml:{line}: limit_equilibrium.toppling.base_friction" in r.stderr
 
 
 def test_report_has_the_limit_equilibrium_section(tmp_path):

@@ -58,12 +58,12 @@ def le(
 
         path = _model_path(model, example)
         if example is None:
-            data, _ = read_document(path)
+            data, nodes = read_document(path)
             if is_case_document(data):
                 doc = {
                     "file": str(path),
                     "name": data.get("name"),
-                    **run_case(data, source=str(path)),
+                    **run_case(data, source=str(path), nodes=nodes),
                 }
                 doc["units"] = data.get("units")
                 if json_:

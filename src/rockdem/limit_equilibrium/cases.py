@@ -28,6 +28,7 @@ from typing import Any
 
 import numpy as np
 
+from ..config.errors import ModelFileError, _line
 from ..errors import InputError
 from .closed_forms import (
     plane_failure,
@@ -58,16 +59,17 @@ def load_case(path: str | Path) -> dict[str, Any]:
     """Read a case file and run its closed form (see :func:`run_case`)."""
     from ..config import read_document
 
-    data, _ = read_document(path)
-    return run_case(data, source=str(path))
+    data, nodes = read_document(path)
+    return run_case(data, source=str(path), nodes=nodes)
 
 
 def _fail(source: str, key: str, problem: str, fix: str = "") -> InputError:
     return InputError(f"{source}: {key}", problem, fix)
 
 
-def run_case(data: dict, *, source: str = "<case>") -> dict[str, Any]:
-    """Run the closed form a case document names.
+def run_case(data: dict, *, source: str = "<case>", nodes: Any = None) -> dict[str, Any]:
+    """Run the closed form a case document names (``nodes``: where its keys
+    are, from :func:`rockdem.config.read_document`, for the line of an error).
 
     Returns
     -------
@@ -80,6 +82,18 @@ def run_case(data: dict, *, source: str = "<case>") -> dict[str, Any]:
         Naming the file and the key: an unknown key, a missing or bad value,
         none or more than one closed form.
     """
+    try:
+        return _run_case(data, source)
+    except InputError as exc:
+        prefix = f"{source}: "
+        if nodes is None or not exc.where.startswith(prefix):
+            raise
+        key = exc.where[len(prefix) :]
+        loc = tuple(int(p) if p.isdigit() else p for p in key.split("."))
+        raise ModelFileError(source, key, exc.problem, exc.fix, _line(nodes, loc)) from None
+
+
+def _run_case(data: dict, source: str) -> dict[str, Any]:
     if not is_case_document(data):
         raise _fail(source, SECTION, "is missing", f"give one of {', '.join(CASES)} under it")
     for key in data:
