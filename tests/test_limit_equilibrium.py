@@ -463,9 +463,7 @@ def test_le_bad_input_is_one_line_and_exit_2(tmp_path, text, fragment):
 def test_le_names_the_line_of_the_bad_key(tmp_path):
     text = TOPPLING_CASE.replace("base_friction: 38.15", "base_friction: 0")
     (tmp_path / "case.yaml").write_text(text)
-    line = 1 + text.splitlines().index(
-        next(t for t in text.splitlines() if "base_friction" in t)
-    )
+    line = 1 + text.splitlines().index(next(t for t in text.splitlines() if "base_friction" in t))
     r = _le("case.yaml", cwd=tmp_path)
     assert f"error: case.yaml:{line}: limit_equilibrium.toppling.base_friction" in r.stderr
 
