@@ -259,3 +259,27 @@ def test_a_dxf_drawing_given_as_a_study_spec_says_it_is_a_drawing(tmp_path):
     model = plane_model(tmp_path)
     r = invoke("study", model, "--spec", drawing, "--out", tmp_path / "o", "--workers", "0")
     assert_refused(r, "spec.dxf: is a DXF drawing, not a model file")
+
+
+def test_a_name_a_spreadsheet_would_run_as_a_formula_is_quoted_in_the_csv(tmp_path):
+    """A joint named `=HYPERLINK(1)` was written as it stands into
+    interfaces.csv, where a spreadsheet would run it (the hostile round's
+    leftover); it is written `'=HYPERLINK(1)`, and numbers as text stay."""
+    import csv
+
+    from rockdem.output import csv_text
+
+    assert csv_text("-1.5") == "-1.5" and csv_text("-x") == "'-x" and csv_text("a=b") == "a=b"
+    path = tmp_path / "m.yaml"
+    path.write_text(
+        "units: kN, m, kPa\n"
+        'joints:\n  "=HYPERLINK(1)": {normal_stiffness: 1.0e+6, friction_angle: 35}\n'
+        "blocks:\n"
+        "  - {fixed: true, vertices: [[-10, -1], [12, -1], [12, 0], [-10, 0]]}\n"
+        "  - {unit_weight: 25, vertices: [[0, 0], [2, 0], [2, 1], [0, 1]]}\n"
+    )
+    r = invoke("run", path, "--out", tmp_path / "o")
+    assert r.exit_code == 0, r.output
+    with (tmp_path / "o" / "interfaces.csv").open() as fh:
+        (row,) = list(csv.DictReader(fh))
+    assert row["kind"] == "'=HYPERLINK(1)"

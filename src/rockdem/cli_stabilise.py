@@ -166,7 +166,7 @@ def write(folder: Path, result, doc: dict[str, Any], units=None) -> list[Path]:
     import csv
     import json
 
-    from .output import column_units, csv_header, staged_folder
+    from .output import column_units, csv_header, csv_text, staged_folder
     from .result_tables import jsonable
     from .stabilisation import save_pictures
 
@@ -183,7 +183,14 @@ def write(folder: Path, result, doc: dict[str, Any], units=None) -> list[Path]:
                 w.writerow([csv_header(c, unit_map) for c in columns])
                 for r in rows:
                     w.writerow(
-                        [" ".join(map(str, v)) if isinstance(v, list) else v for v in r.values()]
+                        [
+                            " ".join(map(str, v))
+                            if isinstance(v, list)
+                            else csv_text(v)
+                            if isinstance(v, str)
+                            else v
+                            for v in r.values()
+                        ]
                     )
         save_pictures(result, tmp)
         names = sorted(p.name for p in tmp.iterdir())

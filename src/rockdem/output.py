@@ -152,7 +152,26 @@ def _csv_value(v: Any) -> Any:
         return "true" if v else "false"
     if isinstance(v, float):
         return repr(v) if math.isfinite(v) else ("inf" if v > 0 else "-inf" if v < 0 else "nan")
+    if isinstance(v, str):
+        return csv_text(v)
     return v
+
+
+#: first characters that make a spreadsheet read a cell as a formula
+_FORMULA_START = ("=", "+", "-", "@", "\t", "\r")
+
+
+def csv_text(text: str) -> str:
+    """A name for a CSV cell, with a leading ``'`` where a spreadsheet would
+    run it as a formula (a joint named ``=HYPERLINK(...)`` was written as it
+    stands; found by hostile testing).  Numbers written as text are kept."""
+    if not text.startswith(_FORMULA_START):
+        return text
+    try:
+        float(text)
+    except ValueError:
+        return "'" + text
+    return text
 
 
 _COLUMNS = {
