@@ -540,3 +540,23 @@ def test_a_load_left_only_on_the_fixed_ground_goes_with_the_rock():
     with pytest.warns(rd.ModelWarning, match=r"stage 1 \(cut\): crest removed with its rock"):
         ex = excavate_in_stages(model, [Stage("cut", blocks=(2,))])
     assert ex.stages[1].analysis.stable and ex.stages[1].model.loads.lines == ()
+
+
+def test_a_berm_says_which_loads_went_with_its_rock():
+    """The berm row of the measures side by side names the surcharge its cut
+    took (the removal rounds' labels did; the berm's note said nothing)."""
+    from rockdem.model import LineLoad
+
+    blocks = rd.Blocks.from_polygons(
+        [[(-2, -1), (6, -1), (6, 0), (-2, 0)], [(0, 0), (2, 0), (2, 1), (0, 1)],
+         [(2, 0), (4, 0), (4, 1), (2, 1)]],
+        fixed=[True, False, False], unit_weight=20,
+    )  # fmt: skip
+    fill = LineLoad((2, 1), (4, 1), 0.0, -10.0, name="fill")
+    model = rd.Model(
+        blocks, rd.Joint(normal_stiffness=1e6, friction_angle=40), loads=rd.Loads(lines=(fill,))
+    )
+    berm = [(-2, 1.0), (2.0, 1.0), (2.0, 0.0), (6, 0.0)]  # block 2 cut away
+    cmp = compare_measures(model, 1.3, berm=berm, support=False, removal=False)
+    (row,) = [m for m in cmp.measures if m.kind == "berm"]
+    assert "fill removed with its rock" in row.note and row.model.loads.lines == ()

@@ -234,8 +234,9 @@ def compare_measures(
         with _progress.stage("berm"):
             fb = rate(mb, width=width)
         _, area = _edit.removed_between(model, mb)
+        took = "; ".join(_edit.removal_notes(model, mb))  # the loads and bolts on the cut rock
         rows.append(
-            Measure("berm", "berm (new profile)", area, None, fb, meets(fb, target_fos), "", mb)
+            Measure("berm", "berm (new profile)", area, None, fb, meets(fb, target_fos), took, mb)
         )
     search = None
     if support and support_at is None and not mechanism_ids(base):
