@@ -546,3 +546,27 @@ def test_the_failure_picture_of_a_search_shows_the_bolts_at_the_limit():
     (dots,) = [c for c in ax.collections if c.get_gid() == "bolt-crossings"]
     expected = colormaps[UTILISATION_CMAP](np.clip(at_limit, 0, 1))
     assert dots.get_facecolors()[:, :3] == pytest.approx(expected[:, :3])
+
+
+def test_a_pretension_that_leaves_no_equilibrium_leaves_the_bolt_out(monkeypatch):
+    """Locking off the pretension of a bolt put in after the loads re-solves
+    the equilibrium; where there is none (forced here), the bolt is not
+    installed and the analysis says so, instead of reporting the bolt at
+    its pretension on blocks that are not in equilibrium with it."""
+    from dataclasses import replace
+
+    from rockdem import analysis
+
+    settle = analysis._settle
+
+    def no_equilibrium_once_installed(system, state, *args, **kwargs):
+        sol, new = settle(system, state, *args, **kwargs)
+        if state.bolt_reference is not None and not state.bolts_waiting:
+            return replace(sol, converged=False), state
+        return sol, new
+
+    monkeypatch.setattr(analysis, "_settle", no_equilibrium_once_installed)
+    model = _stable_block_with_bolt(installed="after_loads", pretension=10.0, name="P1")
+    with pytest.warns(rd.ModelWarning, match="bolts P1 .* were not installed: locking off"):
+        a = rd.analyse(model)
+    assert a.stable and a.state.bolts_waiting and np.all(a.bolts.axial_force == 0)

@@ -428,18 +428,21 @@ def analyse(
 
 def _install_bolts(system, sol, state, q, load_factor, factor, stage):
     """The bolts to go in after the loads installed at ``q``, and the
-    equilibrium their pretension moves the slope to (none: as it was)."""
+    equilibrium their pretension moves the slope to; where it has none, the
+    slope as it was, without them (said in a warning)."""
     bolts = system.bolts
     waiting = np.isnan(state.bolt_reference[:, 0])
-    state = state.with_bolts_installed(bolts.displacement(q))
+    installed = state.with_bolts_installed(bolts.displacement(q))
     if not np.any(bolts.pretension[waiting]):
-        return sol, state, q
-    locked, new_state = _settle(system, state, q, load_factor, factor, stage)
+        return sol, installed, q
+    locked, new_state = _settle(system, installed, q, load_factor, factor, stage)
     if not locked.converged:
+        names = dict.fromkeys(np.asarray(bolts.names)[bolts.bolt[waiting]])
         warnings.warn(
             ModelWarning(
-                "the pretension of the bolts installed after the loads leaves no equilibrium "
-                "(reported as before it was locked in); lower the pretension"
+                f"bolts {', '.join(map(str, names))} (installed: after_loads) were not "
+                "installed: locking off their pretension leaves no equilibrium; lower the "
+                "pretension"
             ),
             stacklevel=3,
         )
