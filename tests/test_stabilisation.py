@@ -560,3 +560,26 @@ def test_a_berm_says_which_loads_went_with_its_rock():
     cmp = compare_measures(model, 1.3, berm=berm, support=False, removal=False)
     (row,) = [m for m in cmp.measures if m.kind == "berm"]
     assert "fill removed with its rock" in row.note and row.model.loads.lines == ()
+
+
+def test_a_design_trial_says_which_loads_went_with_its_rock(tmp_path):
+    """A design of the file that removes a loaded block warns, as a stage
+    does, that the load went with it."""
+    from rockdem.config import load_model
+    from rockdem.stabilisation.plan import study
+
+    path = tmp_path / "m.yaml"
+    path.write_text(
+        "units: kN, m, kPa\n"
+        "joints:\n  j: {normal_stiffness: 1.0e+6, friction_angle: 35}\n"
+        "blocks:\n"
+        "  - {fixed: true, vertices: [[-10, -1], [12, -1], [12, 0], [-10, 0]]}\n"
+        "  - {id: 1, unit_weight: 25, vertices: [[0, 0], [2, 0], [2, 1], [0, 1]]}\n"
+        "  - {id: 2, unit_weight: 25, vertices: [[3, 0], [5, 0], [5, 1], [3, 1]]}\n"
+        "loads:\n  points:\n    - {at: [4, 1], force: [0, -10], name: P}\n"
+        "stabilisation:\n  trials:\n    - {name: t, remove: {blocks: [2]}}\n"
+    )
+    model, cfg = load_model(path)
+    with pytest.warns(rd.ModelWarning, match="design t: P removed with its rock"):
+        (design,) = study(model, cfg, support=False, stages=False).designs
+    assert design.model.loads.points == ()

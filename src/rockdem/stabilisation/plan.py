@@ -7,12 +7,14 @@ draws one picture per trial.
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
+from ..errors import ModelWarning
 from ..model import Model
 from ..results import FactorOfSafety, format_factor
 from ..units import parse_units
@@ -184,6 +186,9 @@ def _study(model, cfg, target_fos, support, stages, width) -> Study:
     for t in spec.trials:
         m = _edit.apply_removal(model, **_removal_kw(t.remove))
         ids, area = _edit.removed_between(model, m)
+        took = _edit.removal_notes(model, m)  # the loads and bolts on the rock it removes
+        if took:
+            warnings.warn(ModelWarning(f"design {t.name}: {'; '.join(took)}"), stacklevel=2)
         with _progress.stage(f"design {t.name}"):
             f = rate(m, width=width)
         then = None
