@@ -416,6 +416,27 @@ def test_excavation_keeps_the_bolts_left_in_the_rock_and_their_yield_history():
     assert after.stable and after.bolts.first_yield.tolist() == [1]  # still from step 1
 
 
+def test_an_unnamed_bolt_keeps_its_number_when_an_earlier_one_goes():
+    """Unnamed bolts are numbered by their place in the model; the one left
+    after its neighbour went with its rock is still ``bolt 2`` (it was
+    renumbered ``bolt 1``, and a report then named the removed bolt's number
+    for the one still in)."""
+    from dataclasses import replace
+
+    from rockdem.stabilisation import _edit
+
+    named = _two_blocks_and_a_yielding_bolt()
+    model = named.replace(bolts=tuple(replace(b, name="") for b in reversed(named.bolts)))
+    with pytest.warns(rd.ModelWarning, match=r"stage 1 \(cut\): bolt 1 removed with its rock"):
+        ex = excavate_in_stages(model, [Stage("cut", blocks=(2,))])
+    after = ex.stages[1]
+    assert [b.name for b in after.model.bolts] == ["bolt 2"]
+    assert set(after.analysis.bolts.name) == {"bolt 2"}
+    assert _edit.removal_notes(model, after.model) == (
+        "bolt 1 removed with its rock (its head or every joint it tied)",
+    )
+
+
 def test_a_removal_trial_keeps_the_bolts():
     """The bolted example's removal design: with its bolts kept, removing the
     three crest blocks above the top row (the planar slide the bolts do not

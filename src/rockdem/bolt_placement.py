@@ -6,6 +6,8 @@ bolts a removal of rock leaves in place.
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import scipy.sparse as sp
 import shapely
@@ -236,16 +238,19 @@ def bolts_left_in_rock(bolts, blocks, faces) -> tuple[tuple, tuple[str, ...]]:
     a removal trial), and the names of those that went with it: a bolt whose
     head block was removed, or every joint it tied, holds nothing.  (The
     removal once dropped every bolt of the model, silently: a bolted slope's
-    excavation stages and removal trials were analysed unbolted.)"""
+    excavation stages and removal trials were analysed unbolted.)  An unnamed
+    bolt that stays keeps the name of its place in the model it came from
+    (``bolt 3`` stays ``bolt 3`` when bolt 1 went with its rock)."""
     if not bolts:
         return (), ()
     tree = shapely.STRtree(blocks.polygons())
     kept, gone = [], []
     for i, bolt in enumerate(bolts):
+        name = bolt.name or f"bolt {i + 1}"
         try:
             _crossed(bolt, "bolts", blocks, faces, tree)
         except InputError:
-            gone.append(bolt.name or f"bolt {i + 1}")
+            gone.append(name)
         else:
-            kept.append(bolt)
+            kept.append(bolt if bolt.name else replace(bolt, name=name))
     return tuple(kept), tuple(gone)

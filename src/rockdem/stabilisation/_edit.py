@@ -7,6 +7,7 @@ cut and keep their ids), which accepts explicit-block models too.
 
 from __future__ import annotations
 
+from collections import Counter
 from collections.abc import Sequence
 
 import numpy as np
@@ -53,11 +54,14 @@ def _back(model: Model, geom) -> Model:
 def removal_notes(before: Model, after: Model) -> tuple[str, ...]:
     """What a removal took with the rock besides blocks: the bolts (their
     head or every joint they tied) and the loads on it (see :func:`_back`)."""
-    gone = [
-        b.name or f"bolt {i + 1}"
-        for i, b in enumerate(before.bolts)
-        if not any(b is kept for kept in after.bolts)
-    ]
+    left = Counter(b.name for b in after.bolts)  # the bolts left are named (bolts_left_in_rock)
+    gone = []
+    for i, b in enumerate(before.bolts):
+        name = b.name or f"bolt {i + 1}"
+        if left[name] > 0:
+            left[name] -= 1
+        else:
+            gone.append(name)
     notes = [f"{name} removed with its rock (its head or every joint it tied)" for name in gone]
     _, on_loads = loads_left_on_rock(after.blocks, before.loads)
     return (*notes, *on_loads)
