@@ -602,5 +602,9 @@ def test_a_design_trial_says_which_loads_went_with_its_rock(tmp_path):
     )
     model, cfg = load_model(path)
     with pytest.warns(rd.ModelWarning, match="design t: P removed with its rock"):
-        (design,) = study(model, cfg, support=False, stages=False).designs
+        result = study(model, cfg, support=False, stages=False)
+    (design,) = result.designs
     assert design.model.loads.points == ()
+    # ... and its row in the report and designs.csv says so as well
+    (row,) = result.tables()["designs"]
+    assert row["note"] == "P removed with its rock"

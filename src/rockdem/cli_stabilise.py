@@ -269,9 +269,16 @@ def print_summary(doc: dict[str, Any], units=None) -> None:
             "yes" if r["reaches_target"] else "no",
             note(r["note"]),
         )
-    out.print(t)
-    for k, text in enumerate(footnotes, start=1):
-        out.print(f"note {k}: {escape(text)}", soft_wrap=False)
+    shown = 0
+
+    def print_with_notes(t: Table) -> None:
+        nonlocal shown
+        out.print(t)
+        for k, text in enumerate(footnotes[shown:], start=shown + 1):
+            out.print(f"note {k}: {escape(text)}", soft_wrap=False)
+        shown = len(footnotes)
+
+    print_with_notes(t)
     if doc.get("designs"):
         t = table(
             "designs of the file",
@@ -281,6 +288,7 @@ def print_summary(doc: dict[str, Any], units=None) -> None:
             "target",
             "further blocks removed",
             "total " + area,
+            "note",
         )
         for r in doc["designs"]:
             texts.append(r["fos_text"])
@@ -291,8 +299,9 @@ def print_summary(doc: dict[str, Any], units=None) -> None:
                 "yes" if r["reaches_target"] else "no",
                 str(len(r["further_blocks"])),
                 _f(r["total_area_removed"]),
+                note(r["note"]),
             )
-        out.print(t)
+        print_with_notes(t)
     if doc.get("stages"):
         t = table("excavation stages", "stage", "name", "verdict", area, "joints failed")
         for r in doc["stages"]:

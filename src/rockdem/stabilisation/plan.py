@@ -37,6 +37,8 @@ class DesignTrial:
     fos: FactorOfSafety
     reached: bool
     then: Stabilisation | None  # further removal to the target (``stabilise: true``)
+    #: what the removal took besides rock: bolts, loads (see :func:`_edit.removal_notes`)
+    notes: tuple[str, ...] = ()
 
     @property
     def total_removed_area(self) -> float:
@@ -96,6 +98,7 @@ class Study:
                 "further_blocks": list(d.then.removed_blocks) if d.then else [],
                 "total_area_removed": d.total_removed_area,
                 "further_reached": d.then.reached if d.then else None,
+                "note": "; ".join(d.notes),
             }
             for d in self.designs
         ]
@@ -207,7 +210,7 @@ def _study(model, cfg, target_fos, support, stages, width) -> Study:
                     width=width,
                     units=units,
                 )
-        designs.append(DesignTrial(t.name, m, ids, area, f, meets(f, target), then))
+        designs.append(DesignTrial(t.name, m, ids, area, f, meets(f, target), then, took))
     excavation = None
     if stages and spec.stages:
         with _progress.stage("excavation stages"):
