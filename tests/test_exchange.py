@@ -460,6 +460,10 @@ def _hostile(tmp_path: Path, case: str) -> Path:
         draw(tmp_path, path.name, fixed=[*p["fixed"], [(20, 5), (30, 5), (30, -1), (20, -1)]])
     elif case == "water-turns-back":
         draw(tmp_path, path.name, water=[(0, 6), (12, 1), (8, 0), (24, -1)])
+    elif case == "wiggly-crest":  # 10,050 vertices on one block's crest
+        x = np.linspace(5.5, 2.0, 10_050)  # within one block's crest
+        crest = list(zip(x, 10.0 + 0.01 * (np.arange(x.size) % 2), strict=True))
+        draw(tmp_path, path.name, outline=[*p["outline"][:4], *crest, (0, 10)])
     elif case == "empty":
         path.write_bytes(b"")
     elif case == "blank-drawing":
@@ -491,6 +495,9 @@ HOSTILE = {
     "fixed-across": ("layer FIXED: LWPOLYLINE #", "crosses the outline", "inside the outline"),
     "water-turns-back": ("water table", "turns back at (8, 0)"),
     "empty": ("the file is empty",),
+    # refused by the cut, not after 37 s of writing and reading the model file
+    # (a 200,000-vertex outline)
+    "wiggly-crest": ("10,053 vertices, more than the limit of 10,000", "fewer vertices"),
     "blank-drawing": ("no layer OUTLINE",),
     "not-dxf": ("not a DXF file",),
     "truncated": ("incomplete", "EOF"),

@@ -31,6 +31,7 @@ def cut_section(section: Section, *, max_blocks: int | None = None) -> SectionBl
     import shapely
 
     from ..blocks import GEOMETRY_RTOL
+    from ..config.build import MAX_VERTICES
     from ..geometry import _topology as topo
 
     source = section.source
@@ -101,6 +102,17 @@ def cut_section(section: Section, *, max_blocks: int | None = None) -> SectionBl
             f"the block at ({x:.6g}, {y:.6g}) collapses: it is thinner than the drawing's "
             f"tolerance ({tol:.3g}, {GEOMETRY_RTOL:g} of the section's size {extent:.3g})",
             "clip the outline closer to the slope, so that every block is wider than that",
+        )
+    if corners.max() > MAX_VERTICES:
+        # refused here, not by the model file read back after writing it (a
+        # 200,000-vertex outline took 37 s of YAML before that said so)
+        k = int(np.argmax(corners))
+        x, y = shapely.get_coordinates(shapely.centroid(free[k]))[0] + origin
+        raise _fail(
+            source,
+            f"the block at ({x:.6g}, {y:.6g}) has {int(corners[k]):,} vertices, more than "
+            f"the limit of {MAX_VERTICES:,} for one block (every edge is an interface of its own)",
+            "draw the outline and the traces with fewer vertices (merge collinear points)",
         )
     polygons = [fxy[foff[i] : foff[i + 1]] + origin for i in range(len(free))]
     ground = shapely.get_parts(shapely.coverage_union_all(faces[in_ground]))
