@@ -328,3 +328,124 @@ def test_below_the_overturning_depth_the_column_slides_at_hoek_and_brays_factor(
     fos = rd.factor_of_safety(_column(d, phi), width=0.002)
     assert fos.mode == "strength"
     assert fos.value == pytest.approx(_column_sliding(d, phi), rel=0.005)
+
+
+# -------------------------------- a chain of three blocks on a polygonal base
+# Kovari & Fritz (1975) / Hoek & Bray (1981) ch. 7, "active and passive
+# blocks" extended to a chain: three blocks on base planes dipping 40, 25
+# and 8 degrees (friction 35, 30, 25) separated by vertical joints (friction
+# 40), the lowest block cut by a 60 degree face; water from a table through
+# the chain to the toe (U on the bases, V on the joints, effective-stress
+# friction, Hoek & Bray's water forces).
+CH_DIP, CH_PHI, CH_JOINT_PHI, CH_TOP, CH_GAMMA = (
+    (40.0, 25.0, 8.0),
+    (35.0, 30.0, 25.0),
+    40.0,
+    16.0,
+    25.0,
+)
+CH_J1 = (-10.0, 10.0 * _tan(CH_DIP[1]))
+CH_J0 = (-20.0, CH_J1[1] + 10.0 * _tan(CH_DIP[0]))
+CH_J2 = (0.0, 0.0)
+CH_TOE = (12.0, -12.0 * _tan(CH_DIP[2]))
+CH_BACK = (CH_J0[0] - (CH_TOP - CH_J0[1]) / _tan(CH_DIP[0]), CH_TOP)
+CH_CREST = (CH_TOE[0] - (CH_TOP - CH_TOE[1]) / _tan(60.0), CH_TOP)
+CH_BLOCKS = (
+    [CH_BACK, CH_J1, (CH_J1[0], CH_TOP)],
+    [CH_J1, CH_J2, (0.0, CH_TOP), (CH_J1[0], CH_TOP)],
+    [CH_J2, CH_TOE, CH_CREST, (0.0, CH_TOP)],
+)
+CH_TABLE = ((-22.0, 15.0), (-10.0, 9.0), (0.0, 3.0), CH_TOE)
+
+
+def _chain(table=(), points=3) -> rd.Model:
+    far = CH_BACK[0] - 20.0
+    ground = [(far, CH_TOP), CH_BACK, CH_J1, CH_J2, CH_TOE, (40.0, CH_TOE[1]), (40.0, -30.0)]
+    ground.append((far, -30.0))
+    blocks = rd.Blocks.from_polygons(
+        [ground, *CH_BLOCKS], fixed=[True, False, False, False], unit_weight=CH_GAMMA
+    )
+    joints = [
+        rd.Joint(normal_stiffness=1e6, friction_angle=phi, name=name)
+        for phi, name in zip(
+            (*CH_PHI, CH_JOINT_PHI), ("base1", "base2", "base3", "joint"), strict=True
+        )
+    ]
+    up = (CH_BACK[0] - 5.0, CH_TOP + 5.0 * _tan(CH_DIP[0]))
+    lines = [[up, CH_J1], [CH_J1, CH_J2], [CH_J2, CH_TOE], [(-10.0, -5.0), (-10.0, 30.0)]]
+    lines.append([(0.0, -5.0), (0.0, 30.0)])
+    return rd.Model(
+        blocks,
+        joints,
+        joint_lines=np.array(lines),
+        line_joint=["base1", "base2", "base3", "joint", "joint"],
+        loads=rd.Loads(water_table=table, water_unit_weight=GAMMA_W),
+        settings=rd.Settings(points_per_interface=points),
+    )
+
+
+def _water_force(table, a, b) -> float:
+    """gamma_w times the integral of max(h(x) - y, 0) along the segment a-b
+    (h the table, linear between its points; a dense trapezoid rule)."""
+    if not table:
+        return 0.0
+    tb = np.array(table)
+    s = np.linspace(0.0, 1.0, 200_001)
+    x, y = a[0] + s * (b[0] - a[0]), a[1] + s * (b[1] - a[1])
+    p = GAMMA_W * np.maximum(np.interp(x, tb[:, 0], tb[:, 1]) - y, 0.0)
+    return float(np.sum(0.5 * (p[1:] + p[:-1])) * (s[1] - s[0])) * math.dist(a, b)
+
+
+def _chain_limit(table=()):
+    """The factor F dividing every tan(phi) at which the chain, each block
+    sliding on its base (each one down relative to the next on the joint
+    between them: the dips decrease), is in limiting equilibrium: from the
+    top, each block's base effective normal N and the effective thrust P it
+    passes on (horizontal, with shear P tan(phi_j) / F) from its force
+    balance; the toe block's residual driving force vanishes.  Returns F and
+    the (N, P) of every block."""
+    from scipy.optimize import brentq
+
+    def area(p):
+        x, y = np.array(p).T
+        return 0.5 * abs(x @ np.roll(y, -1) - y @ np.roll(x, -1))
+
+    W = [CH_GAMMA * area(b) for b in CH_BLOCKS]
+    U = [_water_force(table, a, b) for a, b in ((CH_BACK, CH_J1), (CH_J1, CH_J2), (CH_J2, CH_TOE))]
+    V_ = [_water_force(table, p, (p[0], CH_TOP)) for p in (CH_J1, CH_J2)] + [0.0]
+
+    def march(F, all_=False):
+        P_in, V_in, out = 0.0, 0.0, []
+        mj = _tan(CH_JOINT_PHI) / F
+        for i in range(3):
+            d = math.radians(CH_DIP[i])
+            mu = _tan(CH_PHI[i]) / F
+            n, t = np.array([math.sin(d), math.cos(d)]), np.array([math.cos(d), -math.sin(d)])
+            load = np.array([V_in - V_[i] + P_in, -W[i] - P_in * mj]) + U[i] * n
+            if i < 2:  # N (n - mu t) - P (1, -mj) + load = 0
+                N, P = np.linalg.solve(np.column_stack([n - mu * t, (-1.0, mj)]), -load)
+            else:  # the toe block: the driving force left beyond the friction
+                N = -load @ n
+                P = load @ t - mu * N
+            out.append((N, P))
+            P_in, V_in = P, V_[i]
+        return out if all_ else out[-1][1]
+
+    F = brentq(march, 0.3, 5.0, xtol=1e-12)
+    return F, march(F, True)
+
+
+@pytest.mark.parametrize("points", [2, 3])
+@pytest.mark.parametrize("wet", [False, True])
+def test_a_chain_of_three_blocks_slides_at_the_force_march_limit(wet, points):
+    """Dry 1.4130, with water 1.2397 by the force march (every base and
+    joint in compression at the limit, so the chain moves as one); the
+    DEM's factor within 0.5% (measured 0.02%), all three blocks moving."""
+    table = CH_TABLE if wet else ()
+    exact, forces = _chain_limit(table)
+    assert all(N > 0 for N, _ in forces) and all(P > 0 for _, P in forces[:2])
+    fos = rd.factor_of_safety(_chain(table, points), width=0.002)
+    assert fos.value == pytest.approx(exact, rel=0.005)
+    assert sorted(fos.failed_analysis.unstable_blocks.tolist()) == [1, 2, 3]
+    if wet:
+        assert exact < 0.95 * _chain_limit()[0]  # the water matters
