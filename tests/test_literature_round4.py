@@ -449,3 +449,65 @@ def test_a_chain_of_three_blocks_slides_at_the_force_march_limit(wet, points):
     assert sorted(fos.failed_analysis.unstable_blocks.tolist()) == [1, 2, 3]
     if wet:
         assert exact < 0.95 * _chain_limit()[0]  # the water matters
+
+
+# ------------------------------------------ Culmann's critical height and plane
+# Culmann (1866), as given by Taylor (1948) and Lambe & Whitman (1969) ch. 24
+# (and used for rock slopes by Hoek & Bray 1981, ch. 7): a plane through the
+# toe of a slope of face angle psi_f in a c-phi material fails first at
+# theta_c = (psi_f + phi) / 2, at the height
+# H_c = 4 c sin(psi_f) cos(phi) / (gamma (1 - cos(psi_f - phi))).
+CU_FACE, CU_PHI, CU_C, CU_GAMMA = 70.0, 30.0, 50.0, 26.0
+CU_THETA = 0.5 * (CU_FACE + CU_PHI)
+CU_H = (
+    4
+    * CU_C
+    * math.sin(math.radians(CU_FACE))
+    * math.cos(math.radians(CU_PHI))
+    / (CU_GAMMA * (1 - math.cos(math.radians(CU_FACE - CU_PHI))))
+)
+
+
+def _culmann(height: float, theta: float, points: int = 3) -> rd.Model:
+    """The wedge between the face (toe at the origin, facing -x), the upper
+    surface at ``height`` and a joint through the toe at ``theta``; the rock
+    beyond the joint fixed; the joint's cohesion kept after yield."""
+    out = (height / _tan(theta), height)
+    wedge = [(0.0, 0.0), out, (height / _tan(CU_FACE), height)]
+    ground = [(-20.0, 0.0), (0.0, 0.0), out, (out[0] + 40.0, height), (out[0] + 40.0, -40.0)]
+    ground.append((-20.0, -40.0))
+    blocks = rd.Blocks.from_polygons([ground, wedge], fixed=[True, False], unit_weight=CU_GAMMA)
+    joint = rd.Joint(
+        normal_stiffness=1e6, friction_angle=CU_PHI, cohesion=CU_C, residual_cohesion=CU_C
+    )
+    return rd.Model(blocks, joint, settings=rd.Settings(points_per_interface=points, load_steps=1))
+
+
+def _culmann_fos(height: float, theta: float) -> float:
+    """The plane's factor (c and tan phi both divided by F):
+    (c A + W cos theta tan phi) / (W sin theta), W = gamma H^2 (cot theta -
+    cot psi_f) / 2, A = H / sin theta."""
+    th = math.radians(theta)
+    W = 0.5 * CU_GAMMA * height**2 * (1 / _tan(theta) - 1 / _tan(CU_FACE))
+    return (CU_C * height / math.sin(th) + W * math.cos(th) * _tan(CU_PHI)) / (W * math.sin(th))
+
+
+def test_own_culmann_plane_is_the_least_and_fails_at_h_c():
+    """The factor of the plane at theta_c at H_c is 1, and other planes' higher."""
+    assert _culmann_fos(CU_H, CU_THETA) == pytest.approx(1.0, rel=1e-12)
+    assert min(_culmann_fos(CU_H, CU_THETA + d) for d in (-8, -2, 2, 8)) > 1.0
+
+
+@pytest.mark.parametrize("points", [2, 3])
+def test_culmann_s_critical_plane_fails_at_the_critical_height(points):
+    """At H_c = 26.76 m (face 70, phi 30, c 50, gamma 26) the DEM's factor of
+    the joint at theta_c = 50 degrees is 1 within 0.5%, at 42 and 58 degrees
+    the plane's higher factor (1.071, 1.127) within 0.5%; the wedge on the
+    critical plane stands at 0.98 H_c and slides at 1.02 H_c."""
+    for theta in (CU_THETA - 8.0, CU_THETA, CU_THETA + 8.0):
+        fos = rd.factor_of_safety(_culmann(CU_H, theta, points), width=0.002)
+        assert fos.value == pytest.approx(_culmann_fos(CU_H, theta), rel=0.005), theta
+    assert rd.analyse(_culmann(0.98 * CU_H, CU_THETA, points)).stable
+    a = rd.analyse(_culmann(1.02 * CU_H, CU_THETA, points))
+    assert not a.stable
+    assert list(failure_modes(a).blocks("slides")) == [1]
