@@ -688,3 +688,32 @@ def test_free_toppling_slope_with_water_at_the_recursions_limiting_friction():
     fos = rd.factor_of_safety(_gb_staircase(phi, 0.0), width=0.002)
     assert fos.mode == "strength"
     assert 1.0 - 0.002 <= fos.value <= 1.03
+
+
+# --------------------------------------------- pseudo-static overturning
+@pytest.mark.parametrize("points", [2, 3])
+@pytest.mark.parametrize(
+    ("psi", "b", "h", "kv"),
+    [(0.0, 1.0, 3.0, 0.0), (0.0, 0.5, 2.0, 0.1), (10.0, 1.0, 3.0, 0.0), (10.0, 1.0, 3.0, -0.2)],
+)
+def test_a_column_overturns_at_housner_s_acceleration(psi, b, h, kv, points):
+    """Housner (1963, Bull. Seismol. Soc. Am. 53: 403-417): a rigid block b
+    wide and h high on a level base starts to rock at the horizontal
+    acceleration kh g = (b / h) g; on a base dipping psi with a vertical
+    coefficient kv (downward) the inertia tilts the effective gravity by
+    atan(kh / (1 + kv)), so it overturns iff psi + atan(kh / (1 + kv)) >
+    atan(b / h) (Ashby's toppling condition in the tilted frame):
+    kh_c = (1 + kv) tan(atan(b / h) - psi).  Friction 60 degrees (it does
+    not slide).  The DEM's block stands at 0.98 kh_c and topples at 1.02."""
+    kc = (1 + kv) * math.tan(math.atan(b / h) - math.radians(psi))
+    joint = rd.Joint(normal_stiffness=1e6, friction_angle=60.0)
+    settings = rd.Settings(points_per_interface=points)
+
+    def block(kh):
+        loads = rd.Loads(seismic_h=kh, seismic_v=kv)
+        return V.block_on_plane(psi, joint, width=b, height=h, loads=loads, settings=settings)
+
+    assert rd.analyse(block(0.98 * kc)).stable
+    a = rd.analyse(block(1.02 * kc))
+    assert not a.stable
+    assert list(failure_modes(a).blocks("topples")) == [1]
