@@ -735,7 +735,10 @@ def test_the_factor_search_names_the_crack_water_column_s_toppling():
     `rockdem fos` prints beside 'toppling or a free block; strength does not
     control it'.  The relaxation run behind it ended with the block 22 km
     away (q = 12272, 18221 at F = 0.2; ratio 1.0: no contact left), moving
-    into its base and the back wall in the reported direction."""
+    into its base and the back wall in the reported direction.  Not the
+    water: the same column with the water replaced by equal point loads is
+    flung the same way at F = 0.05; a column on a level base against a wall
+    is not."""
     fos = rd.factor_of_safety(_column(1.02 * _critical_depth()), width=0.002)
     assert fos.value is None and fos.mode == "strength-independent"
     modes = failure_modes(fos.failed_analysis)
