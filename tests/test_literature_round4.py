@@ -16,12 +16,28 @@ rockdem.limit_equilibrium.
 * a column with vertical sides on a dipping base overturned by water in its
   back crack (the tension-crack and base pressure distributions of Hoek &
   Bray 1981 ch. 7 / Wyllie & Mah 2004 sec. 9.4, with moment equilibrium
-  about the toe), and its sliding factor below the overturning depth.
+  about the toe), and its sliding factor below the overturning depth;
+* a chain of three blocks on a polygonal base, dry and with water (the
+  force march of Kovari & Fritz 1975 / Hoek & Bray 1981's active and
+  passive blocks, extended to three blocks);
+* Culmann's (1866) critical height and critical plane through the toe;
+* Goodman & Bray (1976) toppling with water forces on the blocks' sides and
+  bases (the 16-block example, with a toe support and free);
+* pseudo-static overturning of a rigid column (Housner 1963), on a level
+  and a dipping base, with kv.
+
+Where a source states a result only for a special case (the optimum bolt
+for FS = 1, the water terms of the toppling recursion), the general form
+used is derived here from the source's own equilibrium equations, and says
+so.  Equation numbers are not quoted: the books were not at hand to check
+them.
 
 Tolerances: the search's bracket is 0.002 wide (the value within 0.1% of
 the limit); rigid-block limit equilibrium and the DEM's plastic springs
 share their assumptions, so 0.5% on factors, 2% either side of a critical
-water depth.
+water depth, height or acceleration; 1% for the toppling staircase held at
+its toe and 3% for it free (the systematic difference tests/test_toppling.py
+explains).
 """
 
 from __future__ import annotations
@@ -83,8 +99,8 @@ def _plane_failure(b, z_w=0.0, surcharge=None, points=3) -> rd.Model:
 
 
 def _hoek_bray(b, z_w=0.0, Q=0.0):
-    """Hoek & Bray (1981) ch. 7 / Wyllie & Mah (2004) eqs. 6.6-6.9, the crack
-    in the upper surface: z = H - (H cot psi_f + b) tan psi_p,
+    """Hoek & Bray (1981) ch. 7 / Wyllie & Mah (2004) ch. 6, the crack in
+    the upper surface: z = H - (H cot psi_f + b) tan psi_p,
     W = 1/2 gamma H^2 [(1 - (z/H)^2) cot psi_p - cot psi_f],
     A = (H - z) / sin psi_p, U = 1/2 gamma_w z_w A, V = 1/2 gamma_w z_w^2,
     with a vertical external load Q on the block (the external-force term
@@ -100,8 +116,9 @@ def _hoek_bray(b, z_w=0.0, Q=0.0):
     return (C * A + normal * _tan(PHI)) / ((W + Q) * math.sin(p) + Vw * math.cos(p)), W
 
 
-#: Hoek & Bray (1981) ch. 7 / Wyllie & Mah (2004) eqs. 6.10-6.11, the crack
-#: at which a drained slope's factor of safety is least:
+#: Hoek & Bray (1981) ch. 7 / Wyllie & Mah (2004) ch. 6, the crack at which
+#: a drained slope's factor of safety is least (dFS/db = 0 of the equation
+#: below with c > 0, z_w = 0):
 #: z_c / H = 1 - sqrt(cot psi_f tan psi_p), b_c / H = sqrt(cot psi_f cot psi_p) - cot psi_f
 Z_CRIT = H * (1 - math.sqrt(_tan(PLANE) / _tan(FACE)))
 B_CRIT = H * (math.sqrt(1 / (_tan(FACE) * _tan(PLANE))) - 1 / _tan(FACE))
@@ -611,8 +628,10 @@ def _gb_water(k: int, table=GB_TABLE):
 
 def _gb_toe_force(tan_phi, table=GB_TABLE, plunge=10.0):
     """Goodman & Bray (1976) from the top down (Hoek & Bray 1981 ch. 10;
-    Wyllie & Mah 2004 sec. 9.4, where the water forces on each block's sides
-    and base enter its balances): with F_s, F_n, M_w of `_gb_water`,
+    Wyllie & Mah 2004 sec. 9.4), the water forces on each block's sides and
+    base added to its force and moment balances (the terms derived here from
+    those balances, not copied from a source): with F_s, F_n, M_w of
+    `_gb_water`,
     toppling P_(n-1) = [P_n (M_n - dx tan phi) + W_n/2 (y_n sin psi -
     dx cos psi) + M_w] / L_n, sliding P_(n-1) = P_n - [W_n (tan phi cos psi
     - sin psi) - F_n tan phi - F_s] / (1 - tan^2 phi); the toe block's
