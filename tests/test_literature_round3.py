@@ -359,34 +359,16 @@ def _staircase(phi, support, plunge=10.0):
     support at mid-height of the toe block's free face."""
     y = _heights()
     p = math.radians(PSI_P)
-    up = np.array([-math.cos(p), math.sin(p)])
-    normal = np.array([math.sin(p), math.cos(p)])
-
-    def at(s, t):
-        return s * up + t * normal
-
-    blocks = [
-        [
-            at(k * DX, k * STEP),
-            at((k + 1) * DX, k * STEP),
-            at((k + 1) * DX, k * STEP + y[k]),
-            at(k * DX, k * STEP + y[k]),
-        ]
-        for k in range(N)
-    ]
-    line = [at(-2 * DX, 0.0)]
-    for k in range(N):
-        line += [at(k * DX, k * STEP), at((k + 1) * DX, k * STEP)]
-    line.append(at((N + 2) * DX, (N - 1) * STEP))
-    bottom = min(q[1] for q in line) - 20.0
-    ground = [*line, np.array([line[-1][0], bottom]), np.array([line[0][0], bottom])]
-    x, yy = at(0.0, y[0] / 2)
-    return rd.Model(
-        rd.Blocks.from_polygons(
-            [ground, *blocks], fixed=[True] + [False] * N, unit_weight=GAMMA_T, ids=range(N + 1)
-        ),
-        rd.Joint(normal_stiffness=1e6, friction_angle=phi),
-        loads=rd.Loads(points=(rd.PointLoad.anchor(x, yy, support, 180.0 + plunge, name="toe"),)),
+    x, yy = y[0] / 2 * np.array([math.sin(p), math.cos(p)])  # the toe's face, mid-height
+    toe = rd.PointLoad.anchor(x, yy, support, 180.0 + plunge, name="toe")
+    return V.toppling_staircase(
+        y,
+        width=DX,
+        step=STEP,
+        base_dip=PSI_P,
+        joint=rd.Joint(normal_stiffness=1e6, friction_angle=phi),
+        unit_weight=GAMMA_T,
+        loads=rd.Loads(points=(toe,)),
     )
 
 

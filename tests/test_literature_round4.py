@@ -585,19 +585,17 @@ GB_TABLE = tuple(
 def _gb_staircase(phi, support, table=GB_TABLE, plunge=10.0):
     """The blocks on a fixed stepped base, a support at mid-height of the toe
     block's free face plunging ``plunge`` below the horizontal."""
-    line = [_gb_at(-2 * GB_DX, 0.0)]
-    for k in range(GB_N):
-        line += [_gb_at(k * GB_DX, k * GB_STEP), _gb_at((k + 1) * GB_DX, k * GB_STEP)]
-    line.append(_gb_at((GB_N + 2) * GB_DX, (GB_N - 1) * GB_STEP))
-    bottom = min(q[1] for q in line) - 20.0
-    ground = [*line, np.array([line[-1][0], bottom]), np.array([line[0][0], bottom])]
     x, y = _gb_at(0.0, GB_Y[0] / 2)
     points = (rd.PointLoad.anchor(x, y, support, 180.0 + plunge, name="toe"),) if support else ()
-    blocks = rd.Blocks.from_polygons(
-        [ground, *GB_BLOCKS], fixed=[True] + [False] * GB_N, unit_weight=GB_GAMMA, ids=range(17)
+    return V.toppling_staircase(
+        GB_Y,
+        width=GB_DX,
+        step=GB_STEP,
+        base_dip=GB_PSI,
+        joint=rd.Joint(normal_stiffness=1e6, friction_angle=phi),
+        unit_weight=GB_GAMMA,
+        loads=rd.Loads(points=points, water_table=table, water_unit_weight=1.0),
     )
-    loads = rd.Loads(points=points, water_table=table, water_unit_weight=1.0)
-    return rd.Model(blocks, rd.Joint(normal_stiffness=1e6, friction_angle=phi), loads=loads)
 
 
 def _gb_water(k: int, table=GB_TABLE):

@@ -20,6 +20,7 @@ import numpy as np
 import pytest
 
 import rockdem as rd
+from rockdem import verification as V
 from rockdem.limit_equilibrium.closed_forms import stepped_heights, toppling, toppling_fos
 from rockdem.modes import failure_modes
 
@@ -29,29 +30,13 @@ DX, PSI, STEP, GAMMA = 10.0, 30.0, 1.0, 2.5
 
 def staircase(phi: float = PHI, kn: float = 1e6) -> rd.Model:
     """The 16 blocks of the worked example; ids 1 (toe) to 16, ground 0."""
-    y = stepped_heights(16, 10, 5.0, 5.2, STEP)
-    p = np.radians(PSI)
-    up = np.array([-np.cos(p), np.sin(p)])  # up the dip of the treads
-    normal = np.array([np.sin(p), np.cos(p)])
-
-    def at(s, t):
-        return s * up + t * normal
-
-    blocks = []
-    for k in range(16):  # block k + 1: s in [k dx, (k + 1) dx], base k b above the toe's
-        s0, s1, t0 = k * DX, (k + 1) * DX, k * STEP
-        blocks.append([at(s0, t0), at(s1, t0), at(s1, t0 + y[k]), at(s0, t0 + y[k])])
-    line = [at(-2 * DX, 0.0)]
-    for k in range(16):
-        line += [at(k * DX, k * STEP), at((k + 1) * DX, k * STEP)]
-    line.append(at(18 * DX, 15 * STEP))
-    bottom = min(q[1] for q in line) - 20.0
-    ground = [*line, np.array([line[-1][0], bottom]), np.array([line[0][0], bottom])]
-    return rd.Model(
-        rd.Blocks.from_polygons(
-            [ground, *blocks], fixed=[True] + [False] * 16, unit_weight=GAMMA, ids=range(17)
-        ),
-        rd.Joint(normal_stiffness=kn, friction_angle=phi),
+    return V.toppling_staircase(
+        stepped_heights(16, 10, 5.0, 5.2, STEP),
+        width=DX,
+        step=STEP,
+        base_dip=PSI,
+        joint=rd.Joint(normal_stiffness=kn, friction_angle=phi),
+        unit_weight=GAMMA,
     )
 
 
@@ -289,29 +274,8 @@ def columns(face: float, phi: float = 30.0) -> tuple[rd.Model, np.ndarray]:
     a2 = dx * np.tan(np.radians(psi))
     b = dx * np.tan(np.radians(23.0 - psi))
     y = stepped_heights(n, 7, a1, a2, b)
-    p = np.radians(psi)
-    up, normal = np.array([-np.cos(p), np.sin(p)]), np.array([np.sin(p), np.cos(p)])
-
-    def at(s, t):
-        return s * up + t * normal
-
-    blocks = [
-        [at(k * dx, k * b), at((k + 1) * dx, k * b), at((k + 1) * dx, k * b + y[k]),
-         at(k * dx, k * b + y[k])]
-        for k in range(n)
-    ]  # fmt: skip
-    line = [at(-2 * dx, 0.0)]
-    for k in range(n):
-        line += [at(k * dx, k * b), at((k + 1) * dx, k * b)]
-    line.append(at((n + 2) * dx, (n - 1) * b))
-    bottom = min(q[1] for q in line) - 2 * dx
-    ground = [*line, np.array([line[-1][0], bottom]), np.array([line[0][0], bottom])]
-    model = rd.Model(
-        rd.Blocks.from_polygons(
-            [ground, *blocks], fixed=[True] + [False] * n, unit_weight=2.6, ids=range(n + 1)
-        ),
-        rd.Joint(normal_stiffness=1e5, friction_angle=phi),
-    )
+    joint = rd.Joint(normal_stiffness=1e5, friction_angle=phi)
+    model = V.toppling_staircase(y, width=dx, step=b, base_dip=psi, joint=joint, unit_weight=2.6)
     le = toppling_fos(y, width=dx, step=b, base_dip=psi, base_friction=phi, unit_weight=2.6)
     return model, le
 

@@ -66,6 +66,62 @@ def toppling_block(
     )
 
 
+def toppling_staircase(
+    heights,
+    *,
+    width: float,
+    step: float,
+    base_dip: float,
+    joint: Joint,
+    unit_weight: float,
+    loads: Loads | None = None,
+    settings: Settings | None = None,
+) -> Model:
+    """Goodman & Bray's (1976) blocks on a stepped base, as rigid DEM blocks.
+
+    Block ``k`` (ids 1 = toe ... n; the ground is id 0) stands on the tread
+    ``[(k - 1) width, k width]`` up the dip of the treads (``base_dip``
+    degrees toward +x), ``(k - 1) step`` above the toe's tread, and is
+    ``heights[k - 1]`` tall (:func:`rockdem.limit_equilibrium.closed_forms.stepped_heights`
+    for a regular slope).  The fixed ground follows the steps and reaches
+    two widths beyond the blocks on either side and below the lowest step,
+    so :func:`~rockdem.limit_equilibrium.closed_forms.toppling_fos` on the
+    same arguments is the limit-equilibrium answer for this model.
+    """
+    y = np.asarray(heights, dtype=float)
+    n = len(y)
+    p = np.radians(base_dip)
+    up = np.array([-np.cos(p), np.sin(p)])  # up the dip of the treads
+    normal = np.array([np.sin(p), np.cos(p)])
+
+    def at(s, t):
+        return s * up + t * normal
+
+    blocks = [
+        [
+            at(k * width, k * step),
+            at((k + 1) * width, k * step),
+            at((k + 1) * width, k * step + y[k]),
+            at(k * width, k * step + y[k]),
+        ]
+        for k in range(n)
+    ]
+    line = [at(-2 * width, 0.0)]
+    for k in range(n):
+        line += [at(k * width, k * step), at((k + 1) * width, k * step)]
+    line.append(at((n + 2) * width, (n - 1) * step))
+    bottom = min(q[1] for q in line) - 2 * width
+    ground = [*line, np.array([line[-1][0], bottom]), np.array([line[0][0], bottom])]
+    return Model(
+        Blocks.from_polygons(
+            [ground, *blocks], fixed=[True] + [False] * n, unit_weight=unit_weight, ids=range(n + 1)
+        ),
+        joint,
+        loads=loads or Loads(),
+        settings=settings or Settings(),
+    )
+
+
 # ---------------------------------------------------------- two-block wedge
 def wedge_thrust(w1, w2, d1, d2, p1, p2, p3) -> float:
     """Thrust the passive block needs (seed paper Eq. 7; > 0 means unstable)."""
