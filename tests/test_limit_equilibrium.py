@@ -377,6 +377,29 @@ def test_le_runs_the_closed_form_a_case_file_names(tmp_path):
     assert "Goodman & Bray" in text and "sliding blocks (3): 1, 2, 3" in text
 
 
+def test_le_cautions_near_the_lock_of_goodman_and_brays_sliding_equation(tmp_path):
+    """Seventeen 1 m columns on treads dipping 21 degrees (face 65, base 26,
+    phi 35): Goodman & Bray's factor 0.718, where tan^2(phi) / F^2 = 0.95 and
+    the sliding equation's divisor 1 - tan(phi_p) tan(phi_d) is 0.05.  There
+    the random slopes of tests/test_toppling_family.py read up to 13% apart
+    from the DEM: the result says so.  The published example (0.62) does not."""
+    (tmp_path / "near.yaml").write_text(
+        "limit_equilibrium:\n  toppling: {n_blocks: 17, crest_block: 11, a1: 0.966, "
+        "a2: 0.384, step: 0.0875, width: 1.0, base_dip: 21, base_friction: 35, "
+        "unit_weight: 2.6}\n"
+    )
+    r = _le("near.yaml", cwd=tmp_path)
+    assert r.returncode == 0, r.stderr
+    assert "factor of safety: 0.718" in r.stdout
+    assert "caution: at this factor 1 - tan(phi_p) tan(phi_d) = 0.05" in r.stdout
+    doc = json.loads(_le("near.yaml", "--json", cwd=tmp_path).stdout)["result"]
+    assert "locks the toe blocks" in doc["caution"]
+    (tmp_path / "topple.yaml").write_text(TOPPLING_CASE)
+    doc = json.loads(_le("topple.yaml", "--json", cwd=tmp_path).stdout)["result"]
+    assert doc["caution"] == ""
+    assert "caution" not in _le("topple.yaml", cwd=tmp_path).stdout
+
+
 def test_le_says_in_words_what_no_finite_number_can(tmp_path):
     """Found by fuzzing.  Toppling with base friction 89.999 degrees: no
     block can slide (tan phi_p tan phi_d >= 1), the toe needs no support at

@@ -213,6 +213,8 @@ def _print_case(doc: dict[str, Any]) -> None:
         else:
             text = f"[bold]{fs:.4f}[/bold]"
         out.print("factor of safety: " + text)
+        if r.get("caution"):
+            out.print(f"caution: {escape(r['caution'])}")
         for mode in ("stable", "toppling", "sliding"):
             ids = r[f"{mode}_blocks"]
             out.print(f"{mode} blocks ({len(ids)}): " + (_ids(ids) if ids else "none"))
