@@ -736,27 +736,23 @@ def test_a_column_overturns_at_housner_s_acceleration(psi, b, h, kv, points):
     assert list(failure_modes(a).blocks("topples")) == [1]
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="the failed state of a strength-independent search is a dynamic-relaxation run "
-    "at F = 0.0585 that flings the column off (unbalanced force 100% of the loads, "
-    "displacements of km) and reads 'slides' for a column that topples",
-)
 def test_the_factor_search_names_the_crack_water_column_s_toppling():
     """The column overturned by its crack water (1.02 d_c, friction 60
     degrees): `analyse` at the full strength finds it toppling over its toe
     (test_water_in_the_back_crack_overturns_the_column_at_the_moment_balance),
     and the factor-of-safety search rightly rates it as
-    strength-independent; but its failed state, at the strengths divided
-    by 0.0585 (friction tan 29.6: it cannot slide), reads 'slides' - what
-    `rockdem fos` prints beside 'toppling or a free block; strength does not
-    control it'.  The relaxation run behind it ended with the block 22 km
-    away (q = 12272, 18221 at F = 0.2; ratio 1.0: no contact left), moving
-    into its base and the back wall in the reported direction.  Not the
-    water: the same column with the water replaced by equal point loads is
-    flung the same way at F = 0.05; a column on a level base against a wall
-    is not."""
+    strength-independent, and its failed state is the slope's own, at the
+    full strength, toppling.  It was the search's last trial, at the
+    strengths divided by 0.0585 (friction tan 29.6: it cannot slide), and
+    read 'slides' - what `rockdem fos` printed beside 'toppling or a free
+    block; strength does not control it'.  The relaxation run behind it
+    ended with the block 22 km away (q = 12272, 18221 at F = 0.2; ratio 1.0:
+    no contact left), moving into its base and the back wall in the
+    reported direction.  Not the water: the same column with the water
+    replaced by equal point loads was flung the same way at F = 0.05."""
     fos = rd.factor_of_safety(_column(1.02 * _critical_depth()), width=0.002)
     assert fos.value is None and fos.mode == "strength-independent"
+    assert fos.bracket[1] < 0.06  # failing with the strengths 17 times their values
+    assert fos.failed_analysis.strength_factor == 1.0
     modes = failure_modes(fos.failed_analysis)
     assert list(modes.blocks("topples")) == [1]

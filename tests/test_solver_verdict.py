@@ -615,14 +615,17 @@ def test_the_lp_bounds_a_limit_that_newton_stalls_below():
 
 def test_a_block_toppling_at_any_strength_shows_its_mechanism_in_the_trials():
     """A block of b/h = 0.5 tan psi topples whatever the friction (Goodman &
-    Bray): the search ends "strength-independent" with the start analysis at
-    its smallest factor, whose mechanism it showed late; the trial list
-    carries that analysis's statement as well."""
+    Bray): the search ends "strength-independent", showing the mechanism of
+    the slope at its own strength (the first trial, F = 1), which it showed
+    late; the trial list carries that analysis's statement as well."""
+    from rockdem.modes import failure_modes
+
     m = V.toppling_block(25.0, 0.5 * np.tan(np.radians(25.0)) * 2.0, 2.0)
     fos = rd.factor_of_safety(m)
     assert fos.mode == "strength-independent" and fos.proof == "lp-certificate"
     failed = fos.failed_analysis
     assert failed.failure_start is None and failed.evidence.relaxation is not None
-    assert failed.unstable.any()
-    last = fos.trials[-1]
-    assert last.factor == fos.bracket[1] and last.evidence is failed.evidence
+    assert failed.unstable.any() and list(failure_modes(failed).blocks("topples")) == [1]
+    first = fos.trials[0]
+    assert first.factor == failed.strength_factor == 1.0 and first.evidence is failed.evidence
+    assert fos.trials[-1].factor == fos.bracket[1] < 0.06
