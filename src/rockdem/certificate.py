@@ -71,7 +71,14 @@ class Certificate:
             return head
         if self.proves_failure:
             return f"{head}, less than the {self.load_factor:.4g} applied"
-        return f"{head} ({self.load_factor:.4g} applied: an admissible force field exists)"
+        # (said plainly: beside a toppling column's confirmed failure, "an
+        # admissible force field exists" read as a contradiction; the LP lets
+        # every joint carry its friction whether it would open or not)
+        return (
+            f"{head} ({self.load_factor:.4g} applied: forces within the joints' strengths "
+            "could balance the loads, so the LP does not prove failure; whether the blocks "
+            "can take up such forces is for the other checks)"
+        )
 
 
 def admissible_load(
