@@ -124,6 +124,35 @@ def test_wedge_factor_of_safety(p1, p2, p3):
         assert sorted(fos.failed_analysis.unstable_blocks.tolist()) == [1, 2]
 
 
+def _random_wedges(count: int, seed: int = 3):
+    """Seeded random two-block wedges whose Eq. 7 factor lies in 0.3-3:
+    active plane 25-50 degrees, passive 5 degrees flatter or more, friction
+    15-45 on each surface, weights 50-300 and 20-200."""
+    rng = np.random.default_rng(seed)
+    while count:
+        d1 = rng.uniform(25, 50)
+        d2 = rng.uniform(5, d1 - 5)
+        p = rng.uniform(15, 45, 3)
+        w1, w2 = rng.uniform(50, 300), rng.uniform(20, 200)
+        try:
+            exact = V.wedge_fos(w1, w2, d1, d2, *p)
+        except ValueError:  # no root in 0.2-5
+            continue
+        if 0.3 < exact < 3:
+            count -= 1
+            yield V.two_block_wedge(*p, w1=w1, w2=w2, d1=d1, d2=d2), exact
+
+
+def test_random_wedges_read_eq7():
+    """Not tuned to the paper's wedge: 8 random wedges, each within 0.2% of
+    Eq. 7's root and proven by the LP (measured on 20: <= 0.04%).  (None of
+    the eight separates; test_wedge_factor_of_safety's (38, 22) does.)"""
+    for model, exact in _random_wedges(8):
+        fos = rd.factor_of_safety(model)
+        assert fos.value == pytest.approx(exact, rel=0.002)
+        assert fos.proof == "lp-certificate"
+
+
 # --------------------------------------------------------- jointed slope
 def test_bedded_slope_factor_of_safety():
     """Bedding dipping 30 deg out of a 60 deg face, phi = 40, c = 0, vertical cross
