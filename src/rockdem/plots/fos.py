@@ -8,6 +8,7 @@ from matplotlib.lines import Line2D
 from matplotlib.patches import Patch
 from matplotlib.transforms import blended_transform_factory
 
+from ..results import bracket_decimals
 from . import _common as c
 
 
@@ -186,8 +187,14 @@ def plot_fos(
         ax.axvline(fos.value, color=c.OKABE_ITO["blue"], ls="--", lw=1.2, zorder=2)
     ax.set_xlabel("trial factor F (strengths divided by F)")
     if title is None:
-        if fos.value is not None:
-            title = f"Factor of safety {fos.value:.3f} in [{lo:.3f}, {hi:.3f}]"
+        d = bracket_decimals(lo, hi)
+        if fos.value is not None and fos.proof == "undecided":  # as `rockdem fos` says it
+            title = (
+                f"Factor of safety at least {lo:.{d}f} (undecided above; "
+                f"equilibrium lost at {hi:.{d}f})"
+            )
+        elif fos.value is not None:
+            title = f"Factor of safety {fos.value:.4f} in [{lo:.{d}f}, {hi:.{d}f}]"
         else:
             title = f"No factor of safety ({fos.mode}), bracket [{lo:.3g}, {hi:.3g}]"
     ax.set_title(title, fontsize=10)
@@ -210,7 +217,7 @@ def plot_fos(
             ),
         )
     if fos.value is not None:
-        handles.append(Line2D([], [], color=c.OKABE_ITO["blue"], ls="--", label="F of S"))
+        handles.append(Line2D([], [], color=c.OKABE_ITO["blue"], ls="--", label="factor of safety"))
     ax.legend(handles=handles, loc="lower right", fontsize=7, framealpha=0.9)
     if source == "recomputed":
         ax.text(

@@ -1,0 +1,64 @@
+"""What an engineer reads off the outputs: the same number the same everywhere,
+units stated, words that say what they mean (an output review, round ux6)."""
+
+from __future__ import annotations
+
+import matplotlib
+
+matplotlib.use("Agg")
+
+import pytest
+
+import rockdem as rd
+from rockdem import plots
+from rockdem.config import load_model
+from rockdem.examples import example_path
+
+# rockdem.loads calls shapely.line_interpolate_point(g, 0.5, True): deprecated in
+# shapely 2.1 (as in tests/test_plots.py)
+pytestmark = pytest.mark.filterwarnings(
+    "ignore:positional argument `normalized`:DeprecationWarning"
+)
+
+
+@pytest.fixture(scope="module")
+def water_model():
+    return load_model(example_path("plane-failure-water"))[0]
+
+
+@pytest.fixture(scope="module")
+def water_fos(water_model):
+    return rd.factor_of_safety(water_model)
+
+
+def test_fos_plot_title_shows_the_bracket_apart(water_fos):
+    """The search picture's title read "Factor of safety 1.107 in [1.107,
+    1.107]": a bracket of width 0.0005 at three decimals.  It now has the
+    decimals `rockdem fos` prints (1.10693, 1.10742)."""
+    lo, hi = water_fos.bracket
+    assert hi - lo < 1e-3
+    title = plots.plot_fos(water_fos, recompute=False).get_title()
+    assert f"{lo:.5f}" in title and f"{hi:.5f}" in title
+    assert f"{water_fos.value:.4f}" in title
+
+
+def test_fos_plot_legend_names_the_factor_of_safety(water_fos):
+    ax = plots.plot_fos(water_fos, recompute=False)
+    labels = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert "factor of safety" in labels and "F of S" not in labels
+
+
+def test_fos_plot_title_of_an_undecided_top_says_at_least(water_fos):
+    """Where nothing proved or confirmed the failure above the stable end,
+    `rockdem fos` says "at least"; the picture said a plain value in a bracket."""
+    from dataclasses import replace
+
+    from rockdem.results import Evidence
+
+    stall = Evidence(reason="stalled", iterations=40, residuals=(1e-3,))
+    failed = water_fos.failed_analysis
+    steps = (*failed.steps[:-1], replace(failed.steps[-1], evidence=stall))
+    undecided = replace(water_fos, failed_analysis=replace(failed, steps=steps))
+    assert undecided.proof == "undecided"
+    title = plots.plot_fos(undecided, recompute=False).get_title()
+    assert "at least" in title and "undecided" in title
