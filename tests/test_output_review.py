@@ -62,3 +62,21 @@ def test_fos_plot_title_of_an_undecided_top_says_at_least(water_fos):
     assert undecided.proof == "undecided"
     title = plots.plot_fos(undecided, recompute=False).get_title()
     assert "at least" in title and "undecided" in title
+
+
+def test_report_says_the_stresses_of_a_failed_gravity_step_are_at_its_load_factor(tmp_path):
+    """inclined-layers fails in the first of 5 load steps: the report's table
+    "Joints at F = 1" showed the last iterate's stresses at load factor 0.2
+    (a fifth of the gravity stresses) and did not say so."""
+    import re
+
+    from rockdem.report import write_report
+
+    model = load_model(example_path("inclined-layers"))[0]
+    a = rd.analyse(model)
+    assert not a.stable and a.steps[-1].load_factor == pytest.approx(0.2)
+    path = write_report(model, tmp_path, analysis=a, compute_fos=False, animation=False)
+    text = re.sub(r"\s+", " ", path.read_text(encoding="utf-8"))
+    head = text.index("<h3>Joints at F = 1: state now")
+    note = text[head : text.index("<table", head)]
+    assert "last iterate of the failed step (at load factor 0.2, not the full load" in note

@@ -118,6 +118,22 @@ def _inputs(model: Model, system, units: str | None) -> str:
     return "\n".join(out)
 
 
+def _not_equilibrium_note(a: Analysis) -> list[str]:
+    """Where the analysis found no equilibrium, the stresses and states of its
+    tables are those of the last iterate of the failed step, at that step's
+    load factor (inclined-layers: load factor 0.2, stresses a fifth of those
+    under the full load, under a heading that said only "F = 1")."""
+    if a.stable or not a.steps:
+        return []
+    lf = a.steps[-1].load_factor
+    at = "under the full load" if lf >= 1 else f"at load factor {lf:.3g}, not the full load"
+    return [
+        f'<p class="note">No equilibrium: the stresses and joint states below are those '
+        f"of the last iterate of the failed step ({at}; F = {format_factor(a.stress_factor)}"
+        "), not of an equilibrium: they show where the failure starts.</p>"
+    ]
+
+
 def _verdict(a: Analysis, fos: FactorOfSafety | None) -> str:
     cls = a.verdict
     F = f"F = {format_factor(a.strength_factor)}"
@@ -433,6 +449,7 @@ def write_report(
         '<h2 id="tables">Failed joints and unstable blocks</h2>',
         f"<h3>Joints at {F1}: state now and failure history</h3>",
         f'<p class="states">{esc(state_counts(a))}.</p>',
+        *_not_equilibrium_note(a),
         failed_table(a, stress_unit, max_rows, u),
         f"<h3>Unstable blocks at {F1}</h3>",
         unstable_table(a, max_rows, u),
