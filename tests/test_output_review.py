@@ -80,3 +80,27 @@ def test_report_says_the_stresses_of_a_failed_gravity_step_are_at_its_load_facto
     head = text.index("<h3>Joints at F = 1: state now")
     note = text[head : text.index("<table", head)]
     assert "last iterate of the failed step (at load factor 0.2, not the full load" in note
+
+
+def test_report_inputs_state_units_water_and_per_metre(tmp_path, water_model, water_fos):
+    """The report's input tables gave kn, ks, c, tensile strength without a
+    unit, left out the water table of a model with water, and nowhere said
+    that a 2-D section's forces are per metre of slope."""
+    import re
+
+    from rockdem.report import write_report
+
+    path = write_report(
+        water_model,
+        tmp_path,
+        fos=water_fos,
+        units="kN, m, kPa (angles in degrees)",
+        animation=False,
+    )
+    text = re.sub(r"\s+", " ", path.read_text(encoding="utf-8"))
+    inputs = text[text.index('id="inputs"') :]
+    for head in ("kn (kPa/m)", "ks (kPa/m)", "c (kPa)", "tensile (kPa)", "c res. (kPa)"):
+        assert head in inputs, head
+    assert "water table" in inputs and "(-12, 10) - (0, 0)" in inputs
+    assert "9.81 kN/m^3" in inputs
+    assert "per m of slope perpendicular to the section" in inputs

@@ -37,6 +37,12 @@ def _inputs(model: Model, system, units: str | None) -> str:
     summary = [
         ["name", esc(model.name)],
         ["units", esc(units or "consistent user units (not stated)")],
+        [
+            "section",
+            "2-D: forces, weights and areas are per "
+            + esc(parse_units(units).length or "unit length")
+            + " of slope perpendicular to the section",
+        ],
         ["blocks", f"{blocks.n_blocks} ({n_free} free, {blocks.n_blocks - n_free} fixed)"],
         ["interfaces", str(system.interfaces.n_interfaces)],
         ["spring points", str(system.springs.n_springs)],
@@ -69,18 +75,21 @@ def _inputs(model: Model, system, units: str | None) -> str:
         for k, j in enumerate(model.joints)
     ]
     out.append("<h3>Joints</h3>")
+    u = parse_units(units)
+    stiff = f" ({u.stress}/{u.length})" if u.known else ""
+    stress = u.suffix("stress")
     out.append(
         html_table(
             [
                 "joint",
                 "ground",
-                "kn",
-                "ks",
+                "kn" + stiff,
+                "ks" + stiff,
                 "φ (°)",
-                "c",
-                "tensile",
+                "c" + stress,
+                "tensile" + stress,
                 "φ res. (°)",
-                "c res.",
+                "c res." + stress,
                 "interfaces",
             ],
             rows,
@@ -113,6 +122,17 @@ def _inputs(model: Model, system, units: str | None) -> str:
                 f"({num(line.end[0])}, {num(line.end[1])})",
             ]
         )
+    if ld.water_table:
+        rows.append(
+            [
+                "water table",
+                " - ".join(f"({num(x)}, {num(y)})" for x, y in ld.water_table)
+                + f", water unit weight {num(ld.water_unit_weight)}"
+                + u.suffix("unit_weight", " {}"),
+            ]
+        )
+    if ld.pore_pressure_ratio:
+        rows.append(["pore pressure ratio r_u", num(ld.pore_pressure_ratio)])
     out.append("<h3>Loads</h3>")
     out.append(html_table(["load", "value"], rows, left=2, cls="loads"))
     return "\n".join(out)
