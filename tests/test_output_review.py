@@ -104,3 +104,26 @@ def test_report_inputs_state_units_water_and_per_metre(tmp_path, water_model, wa
     assert "water table" in inputs and "(-12, 10) - (0, 0)" in inputs
     assert "9.81 kN/m^3" in inputs
     assert "per m of slope perpendicular to the section" in inputs
+
+
+def test_le_prints_the_bracket_apart_and_the_face_length_unit():
+    """`rockdem le` printed the wedge's bracket as "0.9786 - 0.9786" and the
+    faces' length column without its unit (N and S had theirs)."""
+    from typer.testing import CliRunner
+
+    from rockdem.cli import app
+
+    r = CliRunner().invoke(app, ["le", "--example", "wedge-verification"])
+    assert r.exit_code == 0, r.output
+    assert "(bracket 0.978577 - 0.978638)" in r.stdout
+    assert "length m" in r.stdout and "N t" in r.stdout
+
+
+def test_report_le_faces_table_has_units(water_fos):
+    """The report's Sarma face table headed length, N and S with no unit."""
+    from rockdem.limit_equilibrium.report import html_section
+    from rockdem.units import parse_units
+
+    text = "".join(html_section(water_fos, parse_units("kN, m, kPa")))
+    for head in ("length (m)", "N (kN)", "S (kN)"):
+        assert f"<th>{head}</th>" in text, head

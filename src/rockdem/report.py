@@ -488,7 +488,7 @@ def write_report(
     if fos is not None:
         from .limit_equilibrium.report import html_section as le_section
 
-        sections += le_section(fos)
+        sections += le_section(fos, u)
     if study is not None:
         from .studies.report import html_section
 

@@ -17,6 +17,7 @@ from rich.markup import escape
 from rich.table import Table
 
 from ..limit_equilibrium.report import signed_percent
+from ..results import bracket_decimals
 from ..units import parse_units
 from .common import (
     DebugOpt,
@@ -111,9 +112,10 @@ def _print_sarma(doc: dict[str, Any], r, fos, units) -> None:
     out.print(f"[bold]{escape(doc['model_name'])}[/bold]  ({escape(doc['model_file'])})")
     if fos.value is not None:
         lo, hi = fos.bracket
+        d = bracket_decimals(lo, hi)
         out.print(
             f"DEM factor of safety (strength reduction): [bold]{fos.value:.4f}[/bold] "
-            f"(bracket {lo:.4f} - {hi:.4f})"
+            f"(bracket {lo:.{d}f} - {hi:.{d}f})"
         )
     else:
         out.print(f"DEM factor of safety: none ({fos.mode})")
@@ -141,7 +143,7 @@ def _print_sarma(doc: dict[str, Any], r, fos, units) -> None:
         "kind",
         "LE state",
         "joints",
-        "length",
+        f"length {units.length or ''}".strip(),
         f"N {force}".strip(),
         f"S {force}".strip(),
         "DEM now",

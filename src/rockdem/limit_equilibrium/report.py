@@ -6,10 +6,14 @@ from ..results import FactorOfSafety
 from .sarma import sarma
 
 
-def html_section(fos: FactorOfSafety) -> list[str]:
+def html_section(fos: FactorOfSafety, units=None) -> list[str]:
     """HTML fragments: Sarma's factor of the DEM's mechanism beside the DEM's,
-    its faces, and where the two differ (or, plainly, why there is no factor)."""
+    its faces, and where the two differ (or, plainly, why there is no factor).
+    ``units`` (a :class:`rockdem.units.Units`) labels the lengths and forces."""
     from ..report_html import esc, html_table, num
+    from ..units import UNKNOWN
+
+    u = units or UNKNOWN
 
     head = '<h2 id="limit-equilibrium">Limit equilibrium beside the DEM</h2>'
     try:
@@ -42,7 +46,17 @@ def html_section(fos: FactorOfSafety) -> list[str]:
         for i, f in enumerate(r.faces)
     ]
     table = html_table(
-        ["face", "bodies", "kind", "LE state", "joints", "length", "N", "S", "DEM now"],
+        [
+            "face",
+            "bodies",
+            "kind",
+            "LE state",
+            "joints",
+            "length" + u.suffix("length"),
+            "N" + u.suffix("force"),
+            "S" + u.suffix("force"),
+            "DEM now",
+        ],
         rows,
         left=5,
     )
