@@ -127,3 +127,24 @@ def test_report_le_faces_table_has_units(water_fos):
     text = "".join(html_section(water_fos, parse_units("kN, m, kPa")))
     for head in ("length (m)", "N (kN)", "S (kN)"):
         assert f"<th>{head}</th>" in text, head
+
+
+def test_trust_statement_shows_the_bracket_ends_apart(water_model, water_fos):
+    """The report's first trust line read "equilibrium was found at F = 0.7299
+    and lost at F = 0.7299 ... (+-0.0000)" for the toppling example's bracket
+    0.729858 - 0.729919: four decimals whatever the width."""
+    from rockdem.trust import trust_statements
+
+    lo, hi = water_fos.bracket
+    first = trust_statements(rd.analyse(water_model), water_fos)[0]
+    assert f"found at F = {lo:.5f} and lost at F = {hi:.5f}" in first, first
+    assert f"(+-{(hi - lo) / 2:.1g})" in first
+
+
+def test_unstable_blocks_table_explains_the_mechanism_columns():
+    from rockdem.report_tables import unstable_table
+
+    a = rd.analyse(load_model(example_path("wedge-verification"))[0])
+    text = unstable_table(a, 10)
+    assert "mech. ux" in text and "largest block motion is 1" in text
+    assert "counter-clockwise positive" in text

@@ -120,7 +120,13 @@ def unstable_table(a: Analysis, limit: int, u: Units = UNKNOWN) -> str:
     more = f'<p class="note">... and {idx.size - limit} more.</p>' if idx.size > limit else ""
     counts = ", ".join(f"{n} {m}" for m, n in modes.counts().items() if n and m != "stable")
     lead = f'<p class="modes">Failure modes: {esc(counts)}.</p>'
-    return lead + html_table(header, rows, left=2, cls="unstable-blocks") + more
+    key = (
+        '<p class="note">mech. ux, uy, rot: the direction of each block\'s motion in the '
+        "failure mechanism (translation of its centroid, and rotation in radians, "
+        "counter-clockwise positive), scaled so that the largest block motion is 1: "
+        "relative, not a displacement.</p>"
+    )
+    return lead + html_table(header, rows, left=2, cls="unstable-blocks") + key + more
 
 
 def bolts_table(a: Analysis, u: Units = UNKNOWN) -> str:

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .results import Analysis, FactorOfSafety
+from .results import Analysis, FactorOfSafety, bracket_decimals
 
 PROOF_TEXT = {
     "lp-certificate": "proven: no statically admissible force field carries the loads "
@@ -58,17 +58,18 @@ def trust_statements(a: Analysis, fos: FactorOfSafety | None = None) -> list[str
     failed = fos.failed_analysis if fos is not None else (None if a.stable else a)
     if fos is not None and fos.value is not None:
         lo, hi = fos.bracket
+        d = bracket_decimals(lo, hi)  # "found at 0.7299 and lost at 0.7299" told nothing
         if fos.value == lo < hi:  # a bracket the search could not narrow
             out.append(
-                f"Factor of safety {fos.value:.4f}: equilibrium was found at F = {lo:.4f} and "
-                f"failure confirmed at F = {hi:.4f}; the search could not narrow that bracket, "
-                "so the value is its stable end, the largest factor found stable."
+                f"Factor of safety {fos.value:.4f}: equilibrium was found at F = {lo:.{d}f} and "
+                f"failure confirmed at F = {hi:.{d}f}; the search could not narrow that "
+                "bracket, so the value is its stable end, the largest factor found stable."
             )
         else:
             out.append(
-                f"Factor of safety {fos.value:.4f}: equilibrium was found at F = {lo:.4f} and "
-                f"lost at F = {hi:.4f}; the value is the middle of that bracket "
-                f"(+-{(hi - lo) / 2:.4f})."
+                f"Factor of safety {fos.value:.4f}: equilibrium was found at F = {lo:.{d}f} and "
+                f"lost at F = {hi:.{d}f}; the value is the middle of that bracket "
+                f"(+-{(hi - lo) / 2:.1g})."
             )
         bound = fos.certified_upper_bound
         if bound is not None:
