@@ -148,3 +148,43 @@ def test_unstable_blocks_table_explains_the_mechanism_columns():
     text = unstable_table(a, 10)
     assert "mech. ux" in text and "largest block motion is 1" in text
     assert "counter-clockwise positive" in text
+
+
+def test_stabilise_table_says_accepted_is_not_an_approval(monkeypatch):
+    """`rockdem stabilise` marked "slope as it is" (FS 1.106, target 1.3)
+    "design: accepted" with no word on what that means."""
+    import io
+
+    from rich.console import Console
+
+    import rockdem.cli
+    from rockdem.cli_stabilise import print_summary
+    from rockdem.units import parse_units
+
+    doc = {
+        "model_name": "slope",
+        "model_file": "slope.yaml",
+        "target_fos": 1.3,
+        "reached": False,
+        "message": "block removal stopped",
+        "needs": "",
+        "removal": [
+            {
+                "trial": 0,
+                "label": "slope as it is",
+                "blocks_removed": [],
+                "area_removed": 0.0,
+                "fos_text": "1.106",
+                "reaches_target": False,
+                "accepted": True,
+            }
+        ],
+        "measures": [],
+        "designs": [],
+    }
+    buf = io.StringIO()
+    monkeypatch.setattr(
+        rockdem.cli, "out", Console(file=buf, width=200, highlight=False, soft_wrap=True)
+    )
+    print_summary(doc, parse_units("kN, m, kPa"))
+    assert "accepted = the next round starts from it" in buf.getvalue()

@@ -258,6 +258,12 @@ def print_summary(doc: dict[str, Any], units=None) -> None:
                 "accepted" if r["accepted"] else "tried",
             )
         out.print(t)
+        # "design: accepted" on a row below the target read as an approval
+        out.print(
+            "design: accepted = the next round starts from it (the last accepted is the "
+            "result); it meets the target only where 'target' says yes",
+            soft_wrap=False,
+        )
     t = table("measures side by side", "measure", area, force, "FS", "target", "note")
     for r in doc["measures"]:
         texts.append(r["fos_text"])
