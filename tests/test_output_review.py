@@ -188,3 +188,20 @@ def test_stabilise_table_says_accepted_is_not_an_approval(monkeypatch):
     )
     print_summary(doc, parse_units("kN, m, kPa"))
     assert "accepted = the next round starts from it" in buf.getvalue()
+
+
+def test_stabilise_says_its_fos_bracket_is_coarser_than_rockdem_fos():
+    """plane-failure-water: `rockdem stabilise` printed "slope as it is ...
+    1.106" and `rockdem fos` 1.1072 for the same slope, with no word on why
+    (the study rates every design to a bracket 0.01 wide, the file asks 0.002)."""
+    from typer.testing import CliRunner
+
+    from rockdem.cli import app
+
+    r = CliRunner().invoke(
+        app, ["stabilise", "--example", "plane-failure-water", "--no-support", "-q"]
+    )
+    assert r.exit_code == 0, r.output
+    text = " ".join(r.stdout.split())
+    assert "1.106" in text
+    assert "bracket 0.01 wide; `rockdem fos` narrows it to 0.002" in text

@@ -15,6 +15,10 @@ import typer
 __all__ = ["stabilise"]
 
 
+#: bracket width of every factor of safety the stabilisation study rates
+RATING_WIDTH = 0.01
+
+
 def stabilise(
     model: Annotated[
         Path | None,
@@ -93,7 +97,12 @@ def stabilise(
         with _progress_line(quiet or json_) as note:
             try:
                 result = study(
-                    m, cfg, target_fos=target_fos, support=not no_support, progress=note
+                    m,
+                    cfg,
+                    target_fos=target_fos,
+                    support=not no_support,
+                    width=RATING_WIDTH,
+                    progress=note,
                 )
             except InputError as exc:
                 if not exc.where.startswith("stabilisation."):
@@ -119,6 +128,17 @@ def stabilise(
             _echo_json(doc)
             return
         print_summary(doc, units)
+        width = cfg.analysis.strength_reduction.width
+        if width != RATING_WIDTH:
+            from .cli import out
+
+            # plane-failure-water: "slope as it is 1.106" here, 1.1072 by `rockdem fos`
+            out.print(
+                f"FS here: the middle of a strength-reduction bracket {RATING_WIDTH:g} wide; "
+                f"`rockdem fos` narrows it to {width:g} (analysis.strength_reduction.width), "
+                "so the slope as it is may read slightly differently there",
+                soft_wrap=False,
+            )
 
 
 @contextmanager
