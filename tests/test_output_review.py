@@ -205,3 +205,21 @@ def test_stabilise_says_its_fos_bracket_is_coarser_than_rockdem_fos():
     text = " ".join(r.stdout.split())
     assert "1.106" in text
     assert "bracket 0.01 wide; `rockdem fos` narrows it to 0.002" in text
+
+
+def test_with_water_the_normal_stress_is_labelled_effective(water_fos):
+    """plane-failure-water: the springs carry the effective stress (interface 0:
+    884 kN = W cos psi - U - V sin psi, Hoek & Bray's N'), but the stress
+    picture and the report's joint table said "normal stress" / "σ"."""
+    from html import unescape
+
+    from rockdem.report_tables import failed_table
+
+    a = water_fos.stable_analysis
+    ax = plots.plot_joint_stress(a, stress_unit="kPa").axes[1]
+    assert ax.get_ylabel() == "σ' (kPa)"
+    labels = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert "effective normal stress (compression +)" in labels
+    assert "σ' mean (kPa)" in unescape(failed_table(a, "kPa", 10))
+    dry = rd.analyse(load_model(example_path("wedge-verification"))[0])
+    assert "σ mean (t/m^2)" in failed_table(dry, "t/m^2", 10)

@@ -412,7 +412,8 @@ def write_report(
         pics.append(
             fig(
                 f,
-                f"Normal stress (compression positive), shear stress and shear strength "
+                ("Effective normal stress" if plots.stress.wet(shown) else "Normal stress")
+                + " (compression positive), shear stress and shear strength "
                 f"along {esc(label)} at {at}; the strength is drawn at the same factor.",
                 f"stress along {label}",
                 f"fig-stress-{k}",

@@ -66,7 +66,7 @@ def failed_table(a: Analysis, stress_unit: str, limit: int, u: Units = UNKNOWN) 
         "from - to",
         "length" + u.suffix("length"),
         "failed %",
-        f"σ mean ({stress_unit})",
+        ("σ' mean" if plots.stress.wet(a) else "σ mean") + f" ({stress_unit})",
         f"τ mean ({stress_unit})",
         "first failed (stage)",
         "slip surface",

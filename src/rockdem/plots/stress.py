@@ -195,10 +195,10 @@ def plot_joint_stress(
         ms=3,
         color=c.OKABE_ITO["black"],
         gid="sigma",
-        label="normal stress (compression +)",
+        label=("effective " if wet(a) else "") + "normal stress (compression +)",
     )
     ax_s.axhline(0.0, color="#999999", lw=0.6)
-    ax_s.set_ylabel(f"σ ({stress_unit})")
+    ax_s.set_ylabel(("σ'" if wet(a) else "σ") + f" ({stress_unit})")
     ax_s.legend(fontsize=7, loc="best")
     F = a.stress_factor
     xt, yt = _broken(x, np.abs(sp.tau[s]), path.piece)
@@ -241,6 +241,13 @@ def plot_joint_stress(
         )
     fig.suptitle(title, fontsize=11)
     return fig
+
+
+def wet(a) -> bool:
+    """True when the joints of ``a`` carry water (a water table or r_u): the
+    springs' normal stress is then the effective stress, the pore pressure apart."""
+    loads = a.system.model.loads
+    return bool(len(loads.water_table)) or loads.pore_pressure_ratio > 0
 
 
 def stress_analysis(result):
