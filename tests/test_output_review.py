@@ -223,3 +223,24 @@ def test_with_water_the_normal_stress_is_labelled_effective(water_fos):
     assert "σ' mean (kPa)" in unescape(failed_table(a, "kPa", 10))
     dry = rd.analyse(load_model(example_path("wedge-verification"))[0])
     assert "σ mean (t/m^2)" in failed_table(dry, "t/m^2", 10)
+
+
+def test_stabilise_warns_where_a_design_s_mechanism_reaches_the_model_boundary():
+    """perpendicular-joints: round 2 reads FS 13.777 ("REACHED") for the whole
+    remaining mass sliding along the fixed back and base of the model; the
+    trial's picture marked it, the console and stabilisation.json did not."""
+    import json
+
+    from typer.testing import CliRunner
+
+    from rockdem.cli import app
+
+    args = ["stabilise", "--example", "perpendicular-joints", "--no-support", "-q"]
+    r = CliRunner().invoke(app, args)
+    assert r.exit_code == 0, r.output
+    text = " ".join(r.stdout.split())
+    assert "warning: trial 2 (FS 13.777): the mechanism reaches the fixed" in text
+    doc = json.loads(CliRunner().invoke(app, [*args, "--json"]).stdout)
+    rows = {row["trial"]: row for row in doc["removal"]}
+    assert "base boundary" in rows[2]["boundary"]
+    assert rows[0]["boundary"] == ""

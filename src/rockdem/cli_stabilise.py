@@ -284,6 +284,13 @@ def print_summary(doc: dict[str, Any], units=None) -> None:
             "result); it meets the target only where 'target' says yes",
             soft_wrap=False,
         )
+        for r in doc["removal"]:
+            if r.get("boundary"):
+                out.print(
+                    f"[yellow]warning[/yellow]: trial {r['trial']} (FS {escape(r['fos_text'])}): "
+                    f"{escape(r['boundary'])}",
+                    soft_wrap=False,
+                )
     t = table("measures side by side", "measure", area, force, "FS", "target", "note")
     for r in doc["measures"]:
         texts.append(r["fos_text"])
@@ -328,6 +335,13 @@ def print_summary(doc: dict[str, Any], units=None) -> None:
                 note(r["note"]),
             )
         print_with_notes(t)
+        for r in doc["designs"]:
+            if r.get("boundary"):
+                out.print(
+                    f"[yellow]warning[/yellow]: design {escape(r['design'])} "
+                    f"(FS {escape(r['fos_text'])}): {escape(r['boundary'])}",
+                    soft_wrap=False,
+                )
     if doc.get("stages"):
         t = table("excavation stages", "stage", "name", "verdict", area, "joints failed")
         for r in doc["stages"]:

@@ -84,6 +84,7 @@ class Study:
                     "reaches_target": meets(t.fos, self.target),
                     "accepted": t.accepted,
                     "mechanism": list(t.mechanism),
+                    "boundary": _boundary(t.fos),
                 }
                 for t in self.removal.trials
             ]
@@ -99,6 +100,7 @@ class Study:
                 "total_area_removed": d.total_removed_area,
                 "further_reached": d.then.reached if d.then else None,
                 "note": "; ".join(d.notes),
+                "boundary": _boundary(d.fos),
             }
             for d in self.designs
         ]
@@ -116,6 +118,17 @@ class Study:
             ]
             out["stage_failures"] = self.excavation.failures_by_stage()
         return out
+
+
+def _boundary(fos: FactorOfSafety) -> str:
+    """Where the design's critical mechanism reaches a fixed side of the model
+    ("" if nowhere): its factor is then set by where the section was cut
+    (perpendicular-joints, round 2: FS 13.8 for the whole mass sliding on the
+    model's base, not a word of it beside the table)."""
+    from ..modes import boundary_warnings
+
+    a = fos.failed_analysis
+    return "" if a is None else "; ".join(boundary_warnings(a))
 
 
 def _factor(fos: FactorOfSafety) -> float | None:
