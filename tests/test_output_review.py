@@ -244,3 +244,18 @@ def test_stabilise_warns_where_a_design_s_mechanism_reaches_the_model_boundary()
     rows = {row["trial"]: row for row in doc["removal"]}
     assert "base boundary" in rows[2]["boundary"]
     assert rows[0]["boundary"] == ""
+
+
+def test_stabilise_one_moving_block_is_not_plural():
+    """plane-failure-water: "removing the 1 moving blocks would take 100% of
+    the rock"."""
+    from typer.testing import CliRunner
+
+    from rockdem.cli import app
+
+    r = CliRunner().invoke(
+        app, ["stabilise", "--example", "plane-failure-water", "--no-support", "-q"]
+    )
+    text = " ".join(r.stdout.split())
+    assert "removing the moving block would take 100% of the rock" in text
+    assert "the 1 moving blocks" not in text

@@ -40,6 +40,12 @@ def rate(model: Model, *, width: float = 0.01, largest: float = 1.5 * MAX_TARGET
     return factor_of_safety(model, width=width, largest=largest, progress=_progress.trial_hook())
 
 
+def _blocks(n: int, kind: str) -> str:
+    """``"2 mechanism blocks"``, ``"mechanism block"`` for one (it read "the 1
+    moving blocks")."""
+    return f"{n} {kind} blocks" if n != 1 else f"{kind} block"
+
+
 def meets(fos: FactorOfSafety, target: float) -> bool:
     """True when the design is known stable at the target factor: the bracket's
     stable end reaches it (also where no trial failed: the search stops below
@@ -251,7 +257,7 @@ def stabilise(
         if share > max_removal:
             return _done(target_fos, trials, False, *_too_much(current, mech, share, max_removal))
         fos = rate(cand, width=width)
-        label = f"round {rnd}: remove the {len(mech)} mechanism blocks"
+        label = f"round {rnd}: remove the {_blocks(len(mech), 'mechanism')}"
         notes = _edit.removal_notes(current.model, cand)
         label += f" ({'; '.join(notes)})" if notes else ""
         chosen = add(rnd, label, cand, fos, False)
@@ -335,7 +341,7 @@ def _too_much(current: RemovalTrial, mech, share, limit) -> tuple[str, str]:
             "across the near-vertical joints), or a flatter profile that shortens the columns",
         )
     return (
-        f"block removal stopped: removing the {len(mech)} moving blocks would take "
+        f"block removal stopped: removing the {_blocks(len(mech), 'moving')} would take "
         f"{100 * share:.0f}% of the rock (limit {100 * limit:.0f}%)",
         "support forces (anchors or bolts) or a flatter profile (berm)",
     )
