@@ -259,3 +259,21 @@ def test_stabilise_one_moving_block_is_not_plural():
     text = " ".join(r.stdout.split())
     assert "removing the moving block would take 100% of the rock" in text
     assert "the 1 moving blocks" not in text
+
+
+@pytest.mark.parametrize("draw", ["plot_failure", "plot_model", "plot_deformed"])
+def test_map_pictures_keep_their_axis_labels_inside_the_figure(draw):
+    """The wedge's failure picture (legend outside on the right, a tall
+    equal-aspect map) had "y (m)" cut off at its left edge (x0 = -3.9 px)."""
+    a = rd.analyse(load_model(example_path("wedge-verification"))[0])
+    ax = getattr(plots, draw)(a)
+    import io
+
+    fig = ax.figure
+    fig.savefig(io.BytesIO(), format="png", dpi=100)  # lays it out as the report does
+    r = fig._get_renderer()
+    width, height = fig.bbox.width, fig.bbox.height
+    for label in (ax.yaxis.label, ax.xaxis.label, ax.title):
+        bb = label.get_window_extent(r)
+        assert bb.x0 >= 0 and bb.y0 >= 0, (label.get_text(), bb)
+        assert bb.x1 <= width and bb.y1 <= height, (label.get_text(), bb)

@@ -77,7 +77,10 @@ def new_axes(ax: Axes | None = None, figsize=(8.0, 5.0)) -> Axes:
     """``ax`` itself, or the axes of a new (pyplot-free) figure."""
     if ax is not None:
         return ax
-    fig = Figure(figsize=figsize, layout="constrained")
+    # "compressed": constrained, and an equal-aspect map keeps its y label in the
+    # figure beside a legend outside it (the wedge's failure picture lost "y (m)"
+    # off its left edge with "constrained")
+    fig = Figure(figsize=figsize, layout="compressed")
     return fig.add_subplot()
 
 
