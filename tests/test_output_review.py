@@ -277,3 +277,19 @@ def test_map_pictures_keep_their_axis_labels_inside_the_figure(draw):
         bb = label.get_window_extent(r)
         assert bb.x0 >= 0 and bb.y0 >= 0, (label.get_text(), bb)
         assert bb.x1 <= width and bb.y1 <= height, (label.get_text(), bb)
+
+
+def test_report_stress_picture_follows_the_slip_surface_of_the_failure(
+    tmp_path, water_model, water_fos
+):
+    """plane-failure-water: the stress picture at F = 1 drew the only joint
+    failed there, the open tension crack (all zeros), not the plane the block
+    slides on at the factor of safety."""
+    import re
+
+    from rockdem.report import write_report
+
+    path = write_report(water_model, tmp_path, fos=water_fos, units="kN, m, kPa", animation=False)
+    text = re.sub(r"\s+", " ", path.read_text(encoding="utf-8"))
+    F = rd.results.format_factor(water_fos.failed_analysis.strength_factor)
+    assert f"along the slip surface of the failure (found at F = {F}), stresses at F = 1;" in text

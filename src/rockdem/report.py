@@ -402,8 +402,17 @@ def write_report(
     # stresses of an equilibrium: at F = 1 if stable, else the last one the search found
     shown = a if a.stable or fos is None or fos.stable_analysis is None else fos.stable_analysis
     for k, j in enumerate(joints if joints is not None else [None]):
-        f = plots.plot_joint_stress(shown, j, unit=unit, stress_unit=stress_unit)
         label = "the slip surface / failed joints" if j is None else f"joint {j}"
+        chosen = None
+        lost = fos.failed_analysis if fos is not None else None
+        if j is None and not len(shown.slip_surface) and lost is not None:
+            if len(lost.slip_surface):
+                # the joints the slope fails on, not whatever has yielded at F = 1
+                # (plane-failure-water drew the open tension crack: all zeros)
+                chosen = lost.slip_surface
+                F = format_factor(lost.strength_factor)
+                label = f"the slip surface of the failure (found at F = {F}), stresses"
+        f = plots.plot_joint_stress(shown, j, interfaces=chosen, unit=unit, stress_unit=stress_unit)
         at = f"F = {format_factor(shown.stress_factor)}"
         if shown is not a:
             at += " (the last equilibrium of the strength-reduction search)"
@@ -415,7 +424,7 @@ def write_report(
                 ("Effective normal stress" if plots.stress.wet(shown) else "Normal stress")
                 + " (compression positive), shear stress and shear strength "
                 f"along {esc(label)} at {at}; the strength is drawn at the same factor.",
-                f"stress along {label}",
+                f"stress along {label.removesuffix(', stresses')}",
                 f"fig-stress-{k}",
             )
         )
