@@ -293,3 +293,12 @@ def test_report_stress_picture_follows_the_slip_surface_of_the_failure(
     text = re.sub(r"\s+", " ", path.read_text(encoding="utf-8"))
     F = rd.results.format_factor(water_fos.failed_analysis.strength_factor)
     assert f"along the slip surface of the failure (found at F = {F}), stresses at F = 1;" in text
+
+
+def test_progressive_frame_of_a_failed_trial_says_where_equilibrium_was_lost(water_fos):
+    """plane-failure-water: the last progressive frame read "F = 1.5000 (no
+    equilibrium)" and drew the state at F = 1.1074, where the trial lost it."""
+    last = plots.frames(water_fos)[-1]
+    lost = rd.results.format_factor(water_fos.failed_analysis.strength_factor)
+    assert not last.converged and lost == "1.1074"
+    assert last.label == f"step 2: load x1, F = 1.5000 tried (no equilibrium; lost at {lost})"

@@ -35,6 +35,9 @@ class Frame:
         Worst spring state on every interface.
     final : bool
         The last step (the slip surface and unstable blocks belong to it).
+    failed_at : float or None
+        For a strength trial without equilibrium, the factor at which
+        equilibrium was lost (the state drawn is there, not at the trial's factor).
     """
 
     index: int
@@ -45,13 +48,19 @@ class Frame:
     spring_state: np.ndarray
     interface_state: np.ndarray
     final: bool
+    failed_at: float | None = None
 
     @property
     def label(self) -> str:
         """A short caption, for example ``"step 3: load x0.6, F = 1"``."""
         F = format_factor(self.strength_factor)
-        text = f"step {self.index + 1}: load x{self.load_factor:.3g}, F = {F}"
-        return text if self.converged else text + " (no equilibrium)"
+        head = f"step {self.index + 1}: load x{self.load_factor:.3g}, F = "
+        if self.converged:
+            return head + F
+        if self.failed_at is not None and self.failed_at != self.strength_factor:
+            # "F = 1.5000 (no equilibrium)" for a trial that lost it at 1.1074
+            return head + f"{F} tried (no equilibrium; lost at {format_factor(self.failed_at)})"
+        return head + f"{F} (no equilibrium)"
 
 
 def frames(result) -> list[Frame]:
@@ -89,6 +98,7 @@ def frames(result) -> list[Frame]:
                 s_state,
                 i_state,
                 k == len(a.steps) - 1,
+                None if step.evidence.failed_at is None else float(step.evidence.failed_at),
             )
         )
     return out
