@@ -302,3 +302,20 @@ def test_progressive_frame_of_a_failed_trial_says_where_equilibrium_was_lost(wat
     lost = rd.results.format_factor(water_fos.failed_analysis.strength_factor)
     assert not last.converged and lost == "1.1074"
     assert last.label == f"step 2: load x1, F = 1.5000 tried (no equilibrium; lost at {lost})"
+
+
+def test_run_says_the_written_stresses_of_a_failed_step_are_its_last_iterate(tmp_path):
+    """inclined-layers fails in load step 1 of 5: `rockdem run --out` wrote the
+    last iterate's stresses (load factor 0.2) to interfaces.csv and springs.csv
+    with nothing saying so."""
+    import json
+
+    from typer.testing import CliRunner
+
+    from rockdem.cli import app
+
+    r = CliRunner().invoke(app, ["run", "--example", "inclined-layers", "--out", str(tmp_path)])
+    assert r.exit_code == 0, r.output
+    said = "the last iterate of the failed step (load factor 0.2, not the full load)"
+    assert said in " ".join(r.stderr.split())
+    assert said in json.loads((tmp_path / "result.json").read_text())["stresses_note"]

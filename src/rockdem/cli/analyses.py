@@ -112,6 +112,9 @@ def run(
         units = parse_units(cfg.units)
         doc = {**_header(path, m, cfg), **_units(units), "command": "run", **summary}
         if out_dir is not None:
+            note = _iterate_note(result)
+            if note:  # inclined-layers: the CSVs' stresses at load factor 0.2, unsaid
+                doc["stresses_note"] = note
             echo = {"model": cfg.model_dump(mode="json")}
             _write(
                 out_dir,
@@ -123,10 +126,25 @@ def run(
                 formats=formats,
                 units_note=cfg.units,
             )
+            if note and not (quiet or json_):
+                err.print(f"note: {note}")
         if json_:
             _echo_json(with_issued_warnings(doc))
             return
         _print_run(doc, result)
+
+
+def _iterate_note(result) -> str:
+    """Where a staged analysis found no equilibrium, what the stresses written
+    are: the last iterate of the failed step, at that step's load factor."""
+    if result.stable or not result.steps:
+        return ""
+    lf = result.steps[-1].load_factor
+    load = "the full load" if lf >= 1 else f"load factor {lf:.3g}, not the full load"
+    return (
+        "no equilibrium: the stresses and joint states in these files are the last "
+        f"iterate of the failed step ({load}), not an equilibrium"
+    )
 
 
 def _write(
