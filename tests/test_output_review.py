@@ -319,3 +319,13 @@ def test_run_says_the_written_stresses_of_a_failed_step_are_its_last_iterate(tmp
     said = "the last iterate of the failed step (load factor 0.2, not the full load)"
     assert said in " ".join(r.stderr.split())
     assert said in json.loads((tmp_path / "result.json").read_text())["stresses_note"]
+
+
+def test_check_says_forces_are_per_metre_of_slope():
+    from typer.testing import CliRunner
+
+    from rockdem.cli import app
+
+    r = CliRunner().invoke(app, ["check", "--example", "plane-failure-water"])
+    assert r.exit_code == 0, r.output
+    assert "2-D section: forces and weights per m of slope" in " ".join(r.stdout.split())

@@ -39,9 +39,11 @@ def _inputs(model: Model, system, units: str | None) -> str:
         ["units", esc(units or "consistent user units (not stated)")],
         [
             "section",
-            "2-D: forces, weights and areas are per "
+            "2-D: forces and weights are per "
             + esc(parse_units(units).length or "unit length")
-            + " of slope perpendicular to the section",
+            + " of slope perpendicular to the section (an area is a volume per "
+            + esc(parse_units(units).length or "unit length")
+            + ")",
         ],
         ["blocks", f"{blocks.n_blocks} ({n_free} free, {blocks.n_blocks - n_free} fixed)"],
         ["interfaces", str(system.interfaces.n_interfaces)],

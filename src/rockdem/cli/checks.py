@@ -87,8 +87,12 @@ def _check_summary(path: Path, m, cfg, system) -> dict[str, Any]:
 def _print_check(s: dict[str, Any]) -> None:
     b = s["blocks"]
     out.print(f"[bold]{escape(s['model_name'])}[/bold]  ({escape(s['model_file'])}): valid")
-    out.print(f"units: {escape(s['units']) or '(not stated: add a `units:` note)'}")
     units = parse_units(s["units"])
+    per = f" per {units.length} of slope" if units.known else " per unit length of slope"
+    out.print(
+        f"units: {escape(s['units']) or '(not stated: add a `units:` note)'}; "
+        f"2-D section: forces and weights{per}"
+    )
     force, area = units.suffix("force", " {}"), units.suffix("area", " {}")
     out.print(
         f"blocks: {b['total']} ({b['free']} free, {b['fixed']} fixed); "
