@@ -329,3 +329,17 @@ def test_check_says_forces_are_per_metre_of_slope():
     r = CliRunner().invoke(app, ["check", "--example", "plane-failure-water"])
     assert r.exit_code == 0, r.output
     assert "2-D section: forces and weights per m of slope" in " ".join(r.stdout.split())
+
+
+def test_le_explains_a_negative_critical_acceleration():
+    """inclined-layers: "Kc = -0.0875 g" (= tan(30 - 35), the layers slide at
+    full strength) was printed without a word on what negative means."""
+    from typer.testing import CliRunner
+
+    from rockdem.cli import app
+
+    r = CliRunner().invoke(app, ["le", "--example", "inclined-layers"])
+    assert r.exit_code == 0, r.output
+    text = " ".join(r.stdout.split())
+    assert "Kc = -0.0875 g" in text
+    assert "negative: the blocks slide at full strength even without one" in text

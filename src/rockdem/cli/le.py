@@ -131,7 +131,12 @@ def _print_sarma(doc: dict[str, Any], r, fos, units) -> None:
     if r.critical_acceleration is not None:
         out.print(
             f"critical acceleration at full strength: Kc = {r.critical_acceleration:.4f} g "
-            "(horizontal, in the direction of motion)"
+            "(horizontal, in the direction of motion"
+            + (
+                "; negative: the blocks slide at full strength even without one)"
+                if r.critical_acceleration < 0
+                else ")"
+            )
         )
     out.print(f"rigid bodies ({len(r.bodies)}):")
     for i, body in enumerate(r.bodies):

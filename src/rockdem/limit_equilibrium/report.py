@@ -69,8 +69,13 @@ def html_section(fos: FactorOfSafety, units=None) -> list[str]:
         intro,
         f"<p>DEM (strength reduction): <b>{num(r.dem_fos, '.4f')}</b>; "
         f"Sarma on the same blocks and slip surface: <b>{num(r.fos, '.4f')}</b>{diff}; "
-        f"critical acceleration at full strength Kc = {num(r.critical_acceleration, '.4f')} g."
-        f"</p><p>Rigid bodies: {esc(bodies)}.</p>",
+        f"critical acceleration at full strength Kc = {num(r.critical_acceleration, '.4f')} g"
+        + (
+            " (negative: the blocks slide at full strength even without one)."
+            if r.critical_acceleration is not None and r.critical_acceleration < 0
+            else "."
+        )
+        + f"</p><p>Rigid bodies: {esc(bodies)}.</p>",
         table,
         "<p>Where the two differ:</p><ul>"
         + "".join(f"<li>{esc(n)}</li>" for n in r.notes)
