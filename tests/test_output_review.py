@@ -343,3 +343,17 @@ def test_le_explains_a_negative_critical_acceleration():
     text = " ".join(r.stdout.split())
     assert "Kc = -0.0875 g" in text
     assert "negative: the blocks slide at full strength even without one" in text
+
+
+def test_trust_does_not_say_not_proven_after_giving_the_lp_proof():
+    """bedded-slope: the trust list said "proven from F = 1.2097 (LP)" and two
+    lines on "The failure is confirmed, not proven": it is the top of the
+    bracket (1.1963) that is only confirmed."""
+    from rockdem.trust import trust_statements
+
+    fos = rd.factor_of_safety(load_model(example_path("bedded-slope"))[0])
+    assert fos.proof == "dynamic-relaxation" and fos.certified_upper_bound is not None
+    lines = trust_statements(fos.stable_analysis, fos)
+    assert not any(line.startswith("The failure is confirmed, not proven") for line in lines)
+    top = f"At the top of the bracket (F = {fos.bracket[1]:.4f}) the failure is confirmed, not"
+    assert any(line.startswith(top) for line in lines), lines

@@ -98,7 +98,15 @@ def trust_statements(a: Analysis, fos: FactorOfSafety | None = None) -> list[str
     if failed is not None:
         ev = failed.evidence
         proof = ev.proof or "undecided"
-        out.append(f"The failure is {PROOF_TEXT[proof]}.")
+        if fos is not None and fos.certified_upper_bound is not None and proof != "lp-certificate":
+            # bedded-slope: "The failure is confirmed, not proven" two lines after
+            # "proven from F = 1.2097 (LP)": it is the bracket's top that is not
+            out.append(
+                f"At the top of the bracket (F = {fos.bracket[1]:.4f}) the failure is "
+                f"{PROOF_TEXT[proof]}; the LP proves it only from its bound."
+            )
+        else:
+            out.append(f"The failure is {PROOF_TEXT[proof]}.")
         if ev.relaxation:
             out.append(f"Second solver, {ev.relaxation}.")
         if fos is not None and proof != "lp-certificate":
