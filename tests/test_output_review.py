@@ -357,3 +357,16 @@ def test_trust_does_not_say_not_proven_after_giving_the_lp_proof():
     assert not any(line.startswith("The failure is confirmed, not proven") for line in lines)
     top = f"At the top of the bracket (F = {fos.bracket[1]:.4f}) the failure is confirmed, not"
     assert any(line.startswith(top) for line in lines), lines
+
+
+def test_le_names_a_block_that_slides_and_topples_as_the_dem_does():
+    """bolted-slope: the DEM's tables say block 45 "slides and topples"; `rockdem
+    le` said "block(s) 45 topple"."""
+    from typer.testing import CliRunner
+
+    from rockdem.cli import app
+
+    r = CliRunner().invoke(app, ["le", "--example", "bolted-slope"])
+    assert r.exit_code == 0, r.output
+    text = " ".join(r.stdout.split())
+    assert "the mechanism rotates: block(s) 45 slide and topple;" in text

@@ -189,9 +189,15 @@ def sarma(source: FactorOfSafety | Analysis) -> SarmaResult:
         for m in ("topples", "slides and topples", "falls")
     }
     if bad["topples"] or bad["slides and topples"]:
-        ids = bad["topples"] + bad["slides and topples"]
+        # bolted-slope: block 45 "slides and topples" in the DEM's tables was
+        # said here to "topple"
+        said = [
+            f"block(s) {_ids(bad[m])} {m[:-1] if m == 'topples' else 'slide and topple'}"
+            for m in ("topples", "slides and topples")
+            if bad[m]
+        ]
         why = (
-            f"the mechanism rotates: block(s) {_ids(ids)} topple; Sarma's method rates "
+            f"the mechanism rotates: {' and '.join(said)}; Sarma's method rates "
             "sliding of a chain of blocks, not rotation (for toppling on a stepped base "
             "use the Goodman & Bray closed form)"
         )
