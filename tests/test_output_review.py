@@ -370,3 +370,13 @@ def test_le_names_a_block_that_slides_and_topples_as_the_dem_does():
     assert r.exit_code == 0, r.output
     text = " ".join(r.stdout.split())
     assert "the mechanism rotates: block(s) 45 slide and topple;" in text
+
+
+def test_report_joint_stiffness_unit_in_force_length_units(tmp_path):
+    """A "t, m, t/m^2" model's stiffness header read "kn (t/m^2/m)"."""
+    from rockdem.report import write_report
+
+    model = load_model(example_path("wedge-verification"))[0]
+    path = write_report(model, tmp_path, units="t, m, t/m^2", compute_fos=False, animation=False)
+    text = path.read_text(encoding="utf-8")
+    assert "kn (t/m^3)" in text and "c (t/m^2)" in text and "t/m^2/m" not in text

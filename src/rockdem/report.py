@@ -78,7 +78,9 @@ def _inputs(model: Model, system, units: str | None) -> str:
     ]
     out.append("<h3>Joints</h3>")
     u = parse_units(units)
-    stiff = f" ({u.stress}/{u.length})" if u.known else ""
+    stiff = ""
+    if u.known:  # kPa/m; t/m^3 rather than t/m^2/m
+        stiff = f" ({u.force}/{u.length}^3)" if "/" in u.stress else f" ({u.stress}/{u.length})"
     stress = u.suffix("stress")
     out.append(
         html_table(
