@@ -284,7 +284,10 @@ def _strength_homotopy(system, state, lam, target, F_ok, q_ok, bad, smallest, ma
                     if (target - F_ok) * (target - F_ok - step) <= 0:  # do not overshoot
                         step = target - F_ok
                     continue
-                reason = f"no equilibrium beyond strength factor {F_ok:.6g} ({last.reason})"
+                reason = (
+                    f"no equilibrium beyond strength factor {F_ok:.6g} "
+                    f"(the strengths divided by it; {last.reason})"
+                )
                 return Solve(
                     False,
                     last.q,
