@@ -257,7 +257,8 @@ def compare_measures(
         at = f"({search.at[0]:.2f}, {search.at[1]:.2f})"
         if search.force is None:
             why = (
-                "twice the free blocks' weight: a single force cannot hold the mechanism"
+                "twice the free blocks' weight, as far as the search goes: a force there "
+                "does not hold the mechanism; another point or angle may"
                 if support_largest is None
                 else "the largest force allowed (support.largest)"  # the user's cap, fuzzing
             )
