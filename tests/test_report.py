@@ -75,7 +75,7 @@ def test_one_self_contained_file(report):
 def test_contents(report, results, model):
     a, fos = results
     text = report.read_text(encoding="utf-8")
-    assert f"Factor of safety F = {fos.value:.3f}" in text
+    assert f"Factor of safety F = {fos.value:.4f}" in text
     lo, hi = fos.bracket
     # the bracket's ends, printed with the decimals that show them apart
     ends = re.search(r"\(bracket ([\d.]+) - ([\d.]+)\)", text).groups()
@@ -289,7 +289,7 @@ def _check_with_cli(report: Path, shot: Path, fos_text: str) -> None:
 def test_report_in_headless_browser(report, results, tmp_path):
     _, fos = results
     shot = tmp_path / "report-screenshot.png"
-    fos_text = f"Factor of safety F = {fos.value:.3f}"
+    fos_text = f"Factor of safety F = {fos.value:.4f}"
     driver = _selenium_driver()
     if driver is not None:
         _check_with_selenium(driver, report, shot, fos_text)
@@ -309,7 +309,7 @@ def test_report_in_headless_browser_cli(report, results, tmp_path):
     """The same checks through the chromium command line (no selenium needed)."""
     _, fos = results
     shot = tmp_path / "cli.png"
-    _check_with_cli(report, shot, f"Factor of safety F = {fos.value:.3f}")
+    _check_with_cli(report, shot, f"Factor of safety F = {fos.value:.4f}")
     assert shot.stat().st_size > 10_000
 
 

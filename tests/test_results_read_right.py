@@ -113,7 +113,7 @@ def test_failure_title_names_the_factor_of_the_state_and_the_fos_apart(layers):
     ax = plots.plot_failure(fos)
     title = ax.get_title()
     assert f"F = {format_factor(fos.failed_analysis.strength_factor)}" in title
-    assert f"factor of safety {fos.value:.3f}" in title
+    assert f"factor of safety {fos.value:.4f}" in title
     assert "just above" not in title
 
 
@@ -746,7 +746,7 @@ def test_an_undecided_unstable_end_makes_the_factor_a_lower_bound_only(monkeypat
     assert headline(fos) == f"factor of safety: {fos.value:.4f}"
     from rockdem.report import _verdict
 
-    assert f"Factor of safety: at least {lo:.3f} (undecided" in _verdict(
+    assert f"Factor of safety: at least {lo:.4f} (undecided" in _verdict(
         fos.stable_analysis, undecided
     )
     assert f"Factor of safety F = {fos.value:.3f} " in _verdict(fos.stable_analysis, fos)

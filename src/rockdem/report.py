@@ -172,14 +172,14 @@ def _verdict(a: Analysis, fos: FactorOfSafety | None) -> str:
         lo, hi = fos.bracket
         if fos.value is not None and fos.proof == "undecided":
             parts.append(
-                f'<p class="fos" id="fos">Factor of safety: at least {lo:.3f} (undecided '
+                f'<p class="fos" id="fos">Factor of safety: at least {lo:.4f} (undecided '
                 f"above it: equilibrium was lost at {hi:.4f}, but no failure was proven or "
                 "confirmed there)</p>"
             )
         elif fos.value is not None:
             d = bracket_decimals(lo, hi)
             parts.append(
-                f'<p class="fos" id="fos">Factor of safety F = {fos.value:.3f} '
+                f'<p class="fos" id="fos">Factor of safety F = {fos.value:.4f} '
                 f"(bracket {lo:.{d}f} - {num(hi, f'.{d}f')})</p>"
             )
         else:
@@ -221,7 +221,7 @@ def _failed_where(failed: Analysis, fos: FactorOfSafety) -> str:
         return f"F = {format_factor(F)}, the factor of the failed trial"
     return (
         f"F = {format_factor(F)}, the factor of the failed trial (the factor of safety is "
-        f"{fos.value:.3f}: equilibrium was lost at {hi:.4f} within this trial)"
+        f"{fos.value:.4f}: equilibrium was lost at {hi:.4f} within this trial)"
     )
 
 

@@ -351,7 +351,7 @@ def state_title(a, fos=None) -> str:
     beside it, never implied."""
     title = f"Failure state at F = {format_factor(a.strength_factor)}: {a.verdict}"
     if fos is not None and fos.value is not None:
-        title += f" (factor of safety {fos.value:.3f})"
+        title += f" (factor of safety {fos.value:.4f})"
     return title
 
 
