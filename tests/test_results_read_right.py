@@ -749,7 +749,7 @@ def test_an_undecided_unstable_end_makes_the_factor_a_lower_bound_only(monkeypat
     assert f"Factor of safety: at least {lo:.4f} (undecided" in _verdict(
         fos.stable_analysis, undecided
     )
-    assert f"Factor of safety F = {fos.value:.3f} " in _verdict(fos.stable_analysis, fos)
+    assert f"Factor of safety F = {fos.value:.4f} " in _verdict(fos.stable_analysis, fos)
 
 
 def test_an_unchecked_stall_on_a_large_model_is_stated(monkeypatch):
