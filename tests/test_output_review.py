@@ -380,3 +380,36 @@ def test_report_joint_stiffness_unit_in_force_length_units(tmp_path):
     path = write_report(model, tmp_path, units="t, m, t/m^2", compute_fos=False, animation=False)
     text = path.read_text(encoding="utf-8")
     assert "kn (t/m^3)" in text and "c (t/m^2)" in text and "t/m^2/m" not in text
+
+
+def test_fos_tables_give_the_mechanism_beside_its_failure_mode(water_fos):
+    """`fos --out` writes the stresses of the last equilibrium; its failure
+    columns once came from there too: every block ``unstable`` false and
+    every ``slip_surface`` false beside ``failure_mode`` "slides".  They are
+    the limit's now, as the mode is."""
+    from rockdem.result_tables import analysis_tables
+
+    tables = analysis_tables(water_fos.stable_analysis, water_fos.failed_analysis)
+    moving = [r for r in tables["blocks"] if r["failure_mode"] not in ("stable", "fixed")]
+    assert moving and all(r["unstable"] for r in moving)
+    assert all(
+        r["failure_mode"] in ("stable", "fixed") for r in tables["blocks"] if not r["unstable"]
+    )
+    slip = [r["interface"] for r in tables["interfaces"] if r["slip_surface"]]
+    assert slip == sorted(int(i) for i in water_fos.failed_analysis.slip_surface)
+    # the stresses stay those of the last equilibrium
+    stable = water_fos.stable_analysis.interfaces.normal_stress
+    assert [r["normal_stress"] for r in tables["interfaces"]] == [float(v) for v in stable]
+
+
+def test_fos_drawing_has_the_slip_surface_of_the_limit(water_fos, tmp_path):
+    """`fos --out --format dxf` drew the last equilibrium's slip surface (none)
+    on SLIP_SURFACE: the drawing of a search carries the limit's."""
+    import ezdxf
+
+    from rockdem.exchange.dxf_out import write_dxf
+
+    a, failed = water_fos.stable_analysis, water_fos.failed_analysis
+    path = write_dxf(tmp_path / "r.dxf", a.system.model, a, failed=failed)
+    lines = ezdxf.readfile(path).modelspace().query('LINE[layer=="SLIP_SURFACE"]')
+    assert len(failed.slip_surface) > 0 and len(lines) == len(failed.slip_surface)

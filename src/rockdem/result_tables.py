@@ -77,13 +77,15 @@ def jsonable(value: Any) -> Any:
     return value
 
 
-def analysis_tables(analysis, modes=None) -> dict[str, list[dict[str, Any]]]:
+def analysis_tables(analysis, failed=None) -> dict[str, list[dict[str, Any]]]:
     """Rows of the three tables of an :class:`~rockdem.Analysis`.
 
-    ``modes`` (a :class:`~rockdem.modes.BlockModes`, default: those of
-    ``analysis``) fills the blocks' ``failure_mode`` column: for a
-    factor-of-safety search, pass the modes of the failed end (the mechanism
-    at the limit) beside the tables of the last equilibrium.
+    ``failed``: for a factor-of-safety search, its failed end; the stresses
+    and joint states are those of ``analysis`` (the last equilibrium), the
+    failure columns (``unstable``, ``mechanism_*``, ``failure_mode``, the
+    interfaces' ``slip_surface``) those of the mechanism at the limit.  (They
+    once mixed the two: every ``unstable`` and ``slip_surface`` false beside
+    ``failure_mode`` "slides"; found in the review of the outputs.)
 
     Returns
     -------
@@ -93,8 +95,9 @@ def analysis_tables(analysis, modes=None) -> dict[str, list[dict[str, Any]]]:
     """
     system = analysis.system
     b = system.blocks
-    d, mech = analysis.displacement, analysis.mechanism
-    modes = modes or failure_modes(analysis)
+    limit = failed if failed is not None else analysis
+    d, mech = analysis.displacement, limit.mechanism
+    modes = failure_modes(limit)
     mode = np.where(b.fixed, "fixed", modes.name)
     moving = modes.code > 0
     read = np.where(moving & modes.decided, "limit", np.where(moving, "motion", ""))
@@ -113,7 +116,7 @@ def analysis_tables(analysis, modes=None) -> dict[str, list[dict[str, Any]]]:
             "ux": float(d[i, 0]),
             "uy": float(d[i, 1]),
             "rotation": float(d[i, 2]),
-            "unstable": bool(analysis.unstable[i]),
+            "unstable": bool(limit.unstable[i]),
             "mechanism_x": float(mech[i, 0]),
             "mechanism_y": float(mech[i, 1]),
             "mechanism_rotation": float(mech[i, 2]),
@@ -127,7 +130,7 @@ def analysis_tables(analysis, modes=None) -> dict[str, list[dict[str, Any]]]:
     normal_stress, shear_stress, state_name = r.normal_stress, r.shear_stress, r.state_name
     now_name = r.current_name
     slip = np.zeros(r.n_interfaces, dtype=bool)
-    slip[analysis.slip_surface] = True
+    slip[limit.slip_surface] = True
     interfaces = [
         {
             "interface": i,

@@ -153,7 +153,7 @@ def _write(
     document: dict[str, Any],
     overwrite: bool,
     quiet: bool,
-    modes=None,
+    failed=None,
     units=None,
     formats: tuple[str, ...] = (),
     units_note: str = "",
@@ -161,7 +161,7 @@ def _write(
     from ..output import write_results
     from ..result_tables import analysis_tables
 
-    tables = analysis_tables(analysis, modes)
+    tables = analysis_tables(analysis, failed)
     extra: dict[str, Any] = {}
     if formats:  # VTK, GeoJSON, DXF beside the tables (rockdem.exchange)
         from ..exchange.results import result_writer
@@ -169,7 +169,7 @@ def _write(
         extra = {
             "extra_files": _format_files(formats),
             "write_extra": result_writer(
-                formats, analysis, tables, modes=modes, units=units, units_note=units_note
+                formats, analysis, tables, failed=failed, units=units, units_note=units_note
             ),
         }
     files = write_results(folder, tables, document, overwrite=overwrite, units=units, **extra)
@@ -375,19 +375,17 @@ def fos(
         doc = {**_header(path, m, cfg), **_units(units), "command": "fos", **fos_summary(result)}
         if out_dir is not None:
             state = result.stable_analysis or result.failed_analysis
-            from ..modes import failure_modes
             from ..result_tables import analysis_summary
 
             extra = {"analysis": analysis_summary(state), "model": cfg.model_dump(mode="json")}
-            # the tables describe the last equilibrium; failure_mode is the limit's
-            modes = failure_modes(result.failed_analysis) if result.failed_analysis else None
+            # the tables describe the last equilibrium; the failure columns the limit's
             _write(
                 out_dir,
                 state,
                 with_issued_warnings({**doc, **extra}),
                 overwrite,
                 quiet or json_,
-                modes,
+                result.failed_analysis,
                 units,
                 formats=formats,
                 units_note=cfg.units,

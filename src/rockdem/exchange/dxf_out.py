@@ -112,7 +112,9 @@ def write_section_dxf(
     return path
 
 
-def write_dxf(path: str | Path, model, analysis=None, *, modes=None, units=None) -> Path:
+def write_dxf(
+    path: str | Path, model, analysis=None, *, modes=None, units=None, failed=None
+) -> Path:
     """Draw the blocks, joint traces and (with ``analysis``) the results as DXF.
 
     Parameters
@@ -125,6 +127,10 @@ def write_dxf(path: str | Path, model, analysis=None, *, modes=None, units=None)
         blocks are those with a mode other than stable.
     units : rockdem.units.Units, optional
         Its length unit sets ``$INSUNITS`` (unitless when not known).
+    failed : rockdem.Analysis, optional
+        The failed end of a factor-of-safety search whose last equilibrium
+        ``analysis`` is: the unstable blocks, their modes and the slip
+        surface are its (the slip surface of the last equilibrium is none).
     """
     from .dxf_entities import INSUNITS
 
@@ -157,20 +163,20 @@ def write_dxf(path: str | Path, model, analysis=None, *, modes=None, units=None)
             _xy(model.loads.water_table), dxfattribs={"layer": _layer(doc, "WATER", 5)}
         )
     if analysis is not None:
-        _results(doc, msp, analysis, modes)
+        _results(doc, msp, analysis, modes, failed or analysis)
     path = Path(path)
     doc.saveas(path)
     return path
 
 
-def _results(doc, msp, analysis, modes) -> None:
+def _results(doc, msp, analysis, modes, limit) -> None:
     from ..modes import failure_modes
 
     system = analysis.system
     b = system.blocks
     if modes is None:
-        modes = failure_modes(analysis)
-    unstable = np.asarray(analysis.unstable, bool) | ((np.asarray(modes.code) > 0) & ~b.fixed)
+        modes = failure_modes(limit)
+    unstable = np.asarray(limit.unstable, bool) | ((np.asarray(modes.code) > 0) & ~b.fixed)
     layer = _layer(doc, "UNSTABLE", LAYERS["UNSTABLE"])
     for i in np.flatnonzero(unstable):
         msp.add_lwpolyline(_xy(b.outline(int(i))), close=True, dxfattribs={"layer": layer})
@@ -179,9 +185,9 @@ def _results(doc, msp, analysis, modes) -> None:
     layer = _layer(doc, "FAILED_JOINTS", LAYERS["FAILED_JOINTS"])
     for i in np.flatnonzero(failed):
         msp.add_line(_xy([faces.start[i]])[0], _xy([faces.end[i]])[0], dxfattribs={"layer": layer})
-    if len(analysis.slip_surface):
+    if len(limit.slip_surface):
         layer = _layer(doc, "SLIP_SURFACE", LAYERS["SLIP_SURFACE"])
-        for i in analysis.slip_surface:
+        for i in limit.slip_surface:
             msp.add_line(
                 _xy([faces.start[i]])[0], _xy([faces.end[i]])[0], dxfattribs={"layer": layer}
             )

@@ -50,7 +50,7 @@ def format_files(formats: Iterable[str]) -> tuple[str, ...]:
 
 
 def result_writer(
-    formats: Iterable[str], analysis, tables, *, modes=None, units=None, units_note: str = ""
+    formats: Iterable[str], analysis, tables, *, failed=None, units=None, units_note: str = ""
 ) -> Callable[[Path], Any]:
     """A function writing the formats' files into a folder (the results' temporary one)."""
     formats = tuple(formats)
@@ -69,6 +69,7 @@ def result_writer(
         if "dxf" in formats:
             from .dxf_out import write_dxf
 
-            write_dxf(folder / DXF_FILE, analysis.system.model, analysis, modes=modes, units=units)
+            model = analysis.system.model
+            write_dxf(folder / DXF_FILE, model, analysis, failed=failed, units=units)
 
     return write
