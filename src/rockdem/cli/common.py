@@ -191,8 +191,9 @@ def with_issued_warnings(doc: dict[str, Any]) -> dict[str, Any]:
 
 def _show_warnings() -> None:
     """Print rockdem's :class:`~rockdem.errors.ModelWarning` as one ``warning:
-    ...`` line each on the current stderr, every time it is issued (other
-    warnings as Python shows them)."""
+    ...`` line each on the current stderr, once per command (a stabilise
+    printed a bolt's warning again at every support force it tried; found by
+    hostile testing), other warnings as Python shows them."""
     import warnings
 
     from ..errors import ModelWarning
@@ -206,8 +207,8 @@ def _show_warnings() -> None:
     def show(message, category, filename, lineno, file=None, line=None):
         if issubclass(category, ModelWarning):
             text = " ".join(str(message).split())  # one line, whatever the message
-            err.print(f"warning: {escape(text)}")
             if text not in ISSUED:
+                err.print(f"warning: {escape(text)}")
                 ISSUED.append(text)
         else:
             previous(message, category, filename, lineno, file, line)

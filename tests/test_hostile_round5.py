@@ -1,0 +1,73 @@
+"""Hostile testing, round 5: bolts put in after the loads, stabilisation
+plans, line and point loads at odd places, study outputs.  Each test failed
+before its fix."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import yaml
+from typer.testing import CliRunner
+
+from _cli import assert_refused
+from rockdem.cli import app
+
+runner = CliRunner()
+
+
+def invoke(*args):
+    return runner.invoke(app, [str(a) for a in args])
+
+
+def two_blocks(folder: Path, **extra) -> Path:
+    """Two 2 x 1 blocks stacked on a horizontal fixed plane, with ``extra``
+    top-level keys."""
+    doc = {
+        "units": "kN, m, kPa",
+        "materials": {"rock": {"unit_weight": 25}},
+        "joints": {"plane": {"normal_stiffness": 1.0e6, "friction_angle": 33}},
+        "blocks": [
+            {"fixed": True, "vertices": [[-8, -1], [8, -1], [8, 0], [-8, 0]]},
+            {"material": "rock", "vertices": [[0, 0], [2, 0], [2, 1], [0, 1]]},
+            {"material": "rock", "vertices": [[0, 1], [2, 1], [2, 2], [0, 2]]},
+        ],
+        **extra,
+    }
+    path = folder / "two.yaml"
+    path.write_text(yaml.safe_dump(doc, sort_keys=False))
+    return path
+
+
+def sliding_wedge(folder: Path, **extra) -> Path:
+    """A block on a plane dipping 26.6 degrees with friction 20 (FS 0.73)
+    above a block on the ground, with ``extra`` top-level keys."""
+    doc = {
+        "units": "kN, m, kPa",
+        "materials": {"rock": {"unit_weight": 25}},
+        "joints": {
+            "j": {"normal_stiffness": 1.0e6, "friction_angle": 20},
+            "g": {"normal_stiffness": 1.0e6, "friction_angle": 45},
+        },
+        "ground_joint": "g",
+        "blocks": [
+            {"id": 0, "fixed": True, "vertices": [[-10, -2], [10, -2], [10, 0], [-10, 0]]},
+            {"id": 1, "material": "rock", "vertices": [[0, 0], [4, 0], [4, 1], [0, 3]]},
+            {"id": 2, "material": "rock", "vertices": [[0, 3], [4, 1], [4, 2], [0, 4]]},
+        ],
+        **extra,
+    }
+    path = folder / "wedge.yaml"
+    path.write_text(yaml.safe_dump(doc, sort_keys=False))
+    return path
+
+
+def test_a_warning_is_printed_once_per_command(tmp_path):
+    """A bolt put in after the loads on a slope that never stands was warned
+    about at every support force stabilise tried (11 identical lines)."""
+    bolt = {"name": "B", "head": [4, 1.5], "angle": 200, "length": 5, "capacity": 100,
+            "axial_stiffness": 1.0e4, "installed": "after_loads"}
+    model = sliding_wedge(tmp_path, bolts=[bolt], stabilisation={"target_fos": 1.2})
+    r = invoke("stabilise", model, "--out", tmp_path / "o")
+    assert r.exit_code == 0, r.output
+    lines = [s for s in r.stderr.splitlines() if s.startswith("warning: bolts B")]
+    assert len(lines) == 1, r.stderr
