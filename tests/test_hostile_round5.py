@@ -71,3 +71,20 @@ def test_a_warning_is_printed_once_per_command(tmp_path):
     assert r.exit_code == 0, r.output
     lines = [s for s in r.stderr.splitlines() if s.startswith("warning: bolts B")]
     assert len(lines) == 1, r.stderr
+
+
+def test_a_trapezoid_that_turns_from_pushing_to_pulling_about_its_middle_is_named_so(tmp_path):
+    """q_end = -q averages to nothing: the side it pushes was read from that
+    mean, and the error named a Gauss point "that does not act on any block"."""
+    line = {"start": [0, 2], "end": [2, 2], "q": [0, 10], "q_end": [0, -10]}
+    r = invoke("check", two_blocks(tmp_path, loads={"lines": [line]}))
+    assert_refused(r, "loads.lines[0]", "turns from pushing to pulling", "split it")
+
+
+def test_a_point_force_of_nought_on_a_joint_is_no_error(tmp_path):
+    """A zero force (the first point of a sweep of a load, say) on a joint
+    was refused as one that "points along the boundary between blocks"."""
+    points = [{"at": [2, 1], "force": [0, 0]}, {"at": [1, 0], "force": [0, 0]}]
+    r = invoke("run", two_blocks(tmp_path, loads={"points": points}))
+    assert r.exit_code == 0, r.output
+    assert "STABLE" in r.stdout

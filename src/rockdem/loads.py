@@ -50,6 +50,9 @@ def _locate(
     probe = shapely.points(xy + 10 * blocks.tolerance * unit)
     idx_pt, idx_block = tree.query(probe, predicate="intersects")
     shared = np.flatnonzero(np.bincount(idx_pt, minlength=len(xy)) > 1)
+    # a force of nought pushes nowhere, and either block carries nothing
+    # (it was refused as one "along the boundary"; a sweep may start at 0)
+    shared = shared[np.hypot(*direction[shared].T) > 0]
     if shared.size:  # along a joint: either block could take it (the order chose)
         k = int(shared[0])
         a, b = sorted(int(blocks.ids[i]) for i in idx_block[idx_pt == k][:2])
@@ -60,7 +63,8 @@ def _locate(
             "turn it a little into the block it loads, or move it onto that block's face",
         )
     owner = np.full(len(xy), -1)
-    owner[idx_pt] = idx_block
+    last = np.lexsort((~blocks.fixed[idx_block], idx_pt))  # on several: a free one
+    owner[idx_pt[last]] = idx_block[last]
     missing = np.flatnonzero(owner < 0)
     if missing.size:
         k = int(missing[0])
@@ -121,11 +125,13 @@ def _split_line_loads(blocks: Blocks, loads: Loads):
         name = line.name or f"line load {i}"
         p0, p1 = np.asarray(line.start, float), np.asarray(line.end, float)
         q = line.traction(np.array([0.5]))[0]  # the mean: which side it pushes
+        ends = line.traction(np.array([0.0, 1.0]))
+        if np.hypot(*q) <= 1e-9 * np.hypot(*ends.T).max():
+            q = ends[0]  # a mean of nought (q_end = -q): the ends tell the sides
         length = float(np.hypot(*(p1 - p0)))
         if length <= blocks.tolerance:
             raise InputError(name, "has zero length", "give two different end points")
         unit = q / max(np.hypot(*q), 1e-300)
-        ends = line.traction(np.array([0.0, 1.0]))
         if np.any(ends @ unit < 0):  # (found by fuzzing: named a Gauss point, "acts on no block")
             raise InputError(
                 name,
