@@ -88,3 +88,25 @@ def test_a_point_force_of_nought_on_a_joint_is_no_error(tmp_path):
     r = invoke("run", two_blocks(tmp_path, loads={"points": points}))
     assert r.exit_code == 0, r.output
     assert "STABLE" in r.stdout
+
+
+def test_a_study_error_a_spreadsheet_would_run_as_a_formula_is_quoted(tmp_path, monkeypatch):
+    """samples.csv wrote its text columns as they stand: the `error` of a
+    sample of the model file `=x.yaml` begins with its name, and a
+    spreadsheet runs it; it is written `'=x.yaml ...` and read back as it was
+    (a rerun into the folder continues the study)."""
+    import csv
+
+    points = [{"at": [1, 2], "force": [0, -10]}]
+    study = {"samples": 4, "seed": 0,
+             "inputs": {"loads.points[0].at[0]": {"distribution": "uniform", "min": 0.5, "max": 3}}}
+    model = two_blocks(tmp_path, loads={"points": points}, study=study)
+    model.rename(tmp_path / "=x.yaml")
+    monkeypatch.chdir(tmp_path)
+    out = tmp_path / "o"
+    for _ in range(2):  # the second reads the rows back
+        r = invoke("study", "=x.yaml", "--out", out, "--workers", 0)
+        assert r.exit_code == 0, r.output
+        with (out / "samples.csv").open(newline="") as fh:
+            errors = [row["error"] for row in csv.DictReader(fh) if row["error"]]
+        assert errors and all(e.startswith("'=x.yaml (sample ") for e in errors), errors

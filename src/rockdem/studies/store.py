@@ -24,6 +24,7 @@ from pathlib import Path
 from typing import Any
 
 from ..errors import InputError
+from ..output import csv_text
 
 #: Output columns after the inputs, and their kinds.
 OUTPUTS: dict[str, str] = {
@@ -122,6 +123,8 @@ def _text(value: Any, kind: str) -> str:
         return repr(float(value))  # round-trips exactly
     if kind == "bool":
         return "true" if value else "false"
+    if kind == "str":  # an error naming a file `=x.yaml` first: not a formula
+        return csv_text(str(value))
     return str(value)
 
 
@@ -136,6 +139,8 @@ def _value(text: str, kind: str) -> Any:
         if text not in ("true", "false"):
             raise ValueError(text)
         return text == "true"
+    if kind == "str" and text.startswith("'") and csv_text(text[1:]) == text:
+        return text[1:]  # as _text quoted it
     return text
 
 
