@@ -110,3 +110,43 @@ def test_a_study_error_a_spreadsheet_would_run_as_a_formula_is_quoted(tmp_path, 
         with (out / "samples.csv").open(newline="") as fh:
             errors = [row["error"] for row in csv.DictReader(fh) if row["error"]]
         assert errors and all(e.startswith("'=x.yaml (sample ") for e in errors), errors
+
+
+def four_blocks(folder: Path, bolt: dict) -> Path:
+    """Four 2 x 1 blocks in two columns on a fixed plane, and ``bolt``."""
+    doc = yaml.safe_load(two_blocks(folder).read_text())
+    doc["blocks"][1:] = [
+        {"material": "rock", "vertices": [[x, y], [x + 2, y], [x + 2, y + 1], [x, y + 1]]}
+        for y in (0, 1)
+        for x in (0, 2)
+    ]
+    doc["bolts"] = [{"capacity": 10, "axial_stiffness": 1.0e4, **bolt}]
+    path = folder / "four.yaml"
+    path.write_text(yaml.safe_dump(doc, sort_keys=False))
+    return path
+
+
+def test_a_bolt_through_the_grounds_corner_ties_the_block_to_the_ground(tmp_path):
+    """A bolt from block 4 through the corner (2, 0), where blocks 1, 2 and
+    the ground meet, was tied across the joint 1-2 ending there (the first
+    interface found at that depth), not to the ground it goes into."""
+    import csv
+
+    bolt = {"head": [4, 2], "angle": 225, "length": 4}
+    out = tmp_path / "o"
+    r = invoke("run", four_blocks(tmp_path, bolt), "--out", out)
+    assert r.exit_code == 0, r.output
+    with (out / "bolts.csv").open() as fh:
+        crossed = [int(row["interface"]) for row in csv.DictReader(fh)]
+    with (out / "interfaces.csv").open() as fh:
+        pairs = {int(row["interface"]): {row["block_a"], row["block_b"]} for row in csv.DictReader(fh)}
+    assert [pairs[k] for k in crossed] == [{"2", "4"}, {"0", "2"}]
+
+
+def test_a_bolt_through_a_corner_between_blocks_that_share_no_joint_is_refused(tmp_path):
+    """From block 4 into block 1 through the corner (2, 1) of all four: they
+    share no joint to tie, and the bolt was tied across the joint 1-2."""
+    bolt = {"head": [4, 2], "angle": 206.565051177, "length": 4.4}
+    r = invoke("check", four_blocks(tmp_path, bolt))
+    assert_refused(r, "bolts[0]", "from block 4 to block 1 through the corner at (2, 1)",
+                   "move or turn the bolt a little")

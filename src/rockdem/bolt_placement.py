@@ -107,18 +107,15 @@ def _crossed(bolt, where: str, blocks, faces, tree):
     eps_t, eps_u = tol / bolt.length, tol / np.maximum(np.hypot(*s.T), tol)
     hit = ok & (t > eps_t) & (t < 1 - eps_t) & (u >= -eps_u) & (u <= 1 + eps_u)
     hit = np.flatnonzero(hit)
-    # a crossing through a corner touches several interfaces: keep one per depth
     hit = hit[np.argsort(t[hit], kind="stable")]
-    keep = np.ones(len(hit), dtype=bool)
-    keep[1:] = np.diff(t[hit]) * bolt.length > tol
-    hit = hit[keep]
+    step = max(10 * tol, 1e-6 * min(bolt.length, blocks.extent))
+    hit = _one_per_depth(hit, t, bolt, where, blocks, faces, tree, step)
     free = ~(blocks.fixed[faces.block_a[hit]] & blocks.fixed[faces.block_b[hit]])
     hit = hit[free]
     # rock on both sides: a bolt that leaves the rock through a corner of
     # an interface, or runs along a free face, crosses nothing there
     # (found by fuzzing: one out through a corner into the air held the
     # block above as if anchored, FS 2.797 for 1.213)
-    step = max(10 * tol, 1e-6 * min(bolt.length, blocks.extent))
     sides = [
         shapely.points(head + (t[hit, None] * bolt.length + sign * step) * e)
         for sign in (-1.0, 1.0)
@@ -132,6 +129,45 @@ def _crossed(bolt, where: str, blocks, faces, tree):
             "lengthen it or change its angle so that it ties the moving rock to stable rock",
         )
     return hit, t
+
+
+def _one_per_depth(hit, t, bolt, where, blocks, faces, tree, step):
+    """The interfaces ``hit`` (sorted by depth) with one per depth: where the
+    bolt crosses through a corner it touches several, and the one it crosses
+    joins the block before the corner to the block after it (the first found
+    was kept: one through the ground's corner tied two free blocks instead,
+    found by hostile testing).  InputError where no interface joins them (the
+    blocks touch only at that corner)."""
+    if len(hit) < 2:
+        return hit
+    group = np.concatenate([[0], np.cumsum(np.diff(t[hit]) * bolt.length > blocks.tolerance)])
+    kept = []
+    for g in range(group[-1] + 1):
+        mine = hit[group == g]
+        if len(mine) == 1:
+            kept.append(mine[0])
+            continue
+        at = np.asarray(bolt.head) + t[mine[0]] * bolt.length * bolt.direction
+        sides = [
+            tree.query(shapely.points(at + sign * step * bolt.direction), predicate="within")
+            for sign in (-1.0, 1.0)
+        ]
+        if not all(len(side) == 1 for side in sides):
+            kept.append(mine[0])  # air or a face on one side: crosses nothing here
+            continue
+        pair = {int(sides[0][0]), int(sides[1][0])}
+        join = [k for k in mine if {int(faces.block_a[k]), int(faces.block_b[k])} == pair]
+        if not join:
+            a, b = (int(blocks.ids[side[0]]) for side in sides)
+            raise InputError(
+                where,
+                f"passes from block {a} to block {b} through the corner at "
+                f"({at[0]:.6g}, {at[1]:.6g}), where they touch at that point only",
+                "move or turn the bolt a little so that it crosses the joints away from "
+                "their ends",
+            )
+        kept.append(join[0])
+    return np.array(kept, dtype=hit.dtype)
 
 
 def place_bolts(bolts, blocks, faces, asm):
