@@ -150,3 +150,16 @@ def test_a_bolt_through_a_corner_between_blocks_that_share_no_joint_is_refused(t
     r = invoke("check", four_blocks(tmp_path, bolt))
     assert_refused(r, "bolts[0]", "from block 4 to block 1 through the corner at (2, 1)",
                    "move or turn the bolt a little")
+
+
+def test_a_stage_removing_only_excavated_rock_names_the_stages_by_key(tmp_path):
+    """A second stage over the block the first took was said to remove "only
+    rock that stage 0 already excavated": the report's stage 0 is the slope
+    before excavation, and stages[0] is its stage 1."""
+    stages = [
+        {"name": "first", "remove": {"blocks": [2]}},
+        {"name": "second", "remove": {"regions": [[[0, 3], [4, 1], [4, 5], [0, 5]]]}},
+    ]
+    r = invoke("check", sliding_wedge(tmp_path, stabilisation={"stages": stages}))
+    assert_refused(r, "stabilisation.stages[1].remove",
+                   "removes only rock that stages[0] (`first`) already excavated")

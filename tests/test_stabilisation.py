@@ -377,7 +377,7 @@ def test_a_stage_removing_only_rock_already_excavated_says_so(tmp_path):
         load_model(path)
     said = str(info.value)
     assert "stabilisation.stages[1].remove" in said
-    assert "removes only rock that stage 0 already excavated" in said
+    assert "removes only rock that stages[0] (`a`) already excavated" in said
 
 
 # ------------------------------------------------- bolts through removals

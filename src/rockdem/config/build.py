@@ -307,7 +307,9 @@ def _check_stabilisation(model, cfg: ModelFile, source: str, nodes: Any) -> None
                     _edit.apply_removal(model, **removal(s.remove))
                 except InputError:
                     raise exc from None
-                earlier = "stage 0" if i == 1 else f"stages 0 to {i - 1}"
+                # by key and name: the report's stage 0 is the slope before them all
+                names = ", ".join(f"`{t.name}`" for t in spec.stages[:i])
+                earlier = f"stages[0] ({names})" if i == 1 else f"stages[0:{i}] ({names})"
                 raise InputError(
                     exc.where,
                     f"removes only rock that {earlier} already excavated",
