@@ -163,3 +163,21 @@ def test_a_stage_removing_only_excavated_rock_names_the_stages_by_key(tmp_path):
     r = invoke("check", sliding_wedge(tmp_path, stabilisation={"stages": stages}))
     assert_refused(r, "stabilisation.stages[1].remove",
                    "removes only rock that stages[0] (`first`) already excavated")
+
+
+def test_a_bolt_of_a_slope_that_stands_is_not_said_never_installed_by_stabilise(tmp_path):
+    """The slope stands (FS 1.1) and its after_loads bolt goes in; stabilise's
+    support search tried it at the target 1.3, where it fails, and printed
+    that the bolt "was never installed: the slope finds no equilibrium under
+    its loads" (of the model, as it read)."""
+    bolt = {"name": "B", "head": [4, 1.5], "angle": 200, "length": 5, "capacity": 1,
+            "axial_stiffness": 1.0e4, "installed": "after_loads"}
+    model = sliding_wedge(tmp_path, bolts=[bolt], stabilisation={"target_fos": 1.3})
+    doc = yaml.safe_load(model.read_text())
+    doc["joints"]["j"]["friction_angle"] = 29
+    model.write_text(yaml.safe_dump(doc, sort_keys=False))
+    r = invoke("run", model)
+    assert r.exit_code == 0 and "STABLE" in r.stdout and "never installed" not in r.stderr
+    r = invoke("stabilise", model, "--out", tmp_path / "o")
+    assert r.exit_code == 0, r.output
+    assert "never installed" not in r.stderr

@@ -352,5 +352,8 @@ def _done(target, trials, reached, message, needs="") -> Stabilisation:
 
 
 def stable_at(model: Model, factor: float) -> bool:
-    """True when the staged analysis finds equilibrium with strengths divided by ``factor``."""
-    return analyse(model, strength_factor=factor).stable
+    """True when the staged analysis finds equilibrium with strengths divided by
+    ``factor``: a trial of a search, so without the mechanism of a failure
+    and its warnings (an after_loads bolt of a slope that stands was said
+    "never installed" because a trial at the target failed)."""
+    return analyse(model, strength_factor=factor, show_mechanism=False).stable
