@@ -181,3 +181,24 @@ def test_a_bolt_of_a_slope_that_stands_is_not_said_never_installed_by_stabilise(
     r = invoke("stabilise", model, "--out", tmp_path / "o")
     assert r.exit_code == 0, r.output
     assert "never installed" not in r.stderr
+
+
+def test_a_bolt_never_installed_is_reported_so_not_as_carrying_nothing(tmp_path):
+    """An after_loads bolt of a slope that never stands was listed as
+    "crosses 1 joint, no axial force (0% of capacity)", and in the JSON
+    like a bolt in place that carries nothing."""
+    import json
+
+    bolt = {"name": "B", "head": [4, 1.5], "angle": 200, "length": 5, "capacity": 100,
+            "axial_stiffness": 1.0e4, "installed": "after_loads"}
+    model = sliding_wedge(tmp_path, bolts=[bolt])
+    r = invoke("run", model)
+    assert r.exit_code == 0, r.output
+    assert "  B: not installed (installed: after_loads)" in r.stdout
+    r = invoke("run", model, "--json")
+    (summary,) = json.loads(r.stdout)["bolt_summary"]
+    assert summary["installed"] is False
+    bolt["installed"] = "before_loads"
+    r = invoke("run", sliding_wedge(tmp_path, bolts=[bolt]), "--json")
+    (summary,) = json.loads(r.stdout)["bolt_summary"]
+    assert summary["installed"] is True

@@ -244,6 +244,8 @@ class BoltResults:
     yielded: np.ndarray
     #: stage (load step or strength trial) of the first yield, -1 if never
     first_yield: np.ndarray | None = None
+    #: False where a bolt to go in after the loads never went in (None: all in)
+    installed: np.ndarray | None = None
 
     @property
     def utilisation(self) -> np.ndarray:
@@ -284,4 +286,5 @@ def bolt_results(
         crossings.t_max * per_bolt,
         yielded,
         np.full(crossings.n, -1) if first_yield is None else np.asarray(first_yield),
+        None if reference is None else ~np.isnan(reference[:, 0]),
     )

@@ -236,8 +236,9 @@ def bolt_summary(analysis) -> list[dict[str, Any]]:
     """Per bolt: the joints it crosses, its axial force of largest magnitude
     (per bolt, signed: tension positive; a bolt's largest tension would hide
     a compression at capacity at another crossing), the largest utilisation,
-    how many of its crossings have yielded, and the stage of its first yield
-    (None: never)."""
+    how many of its crossings have yielded, the stage of its first yield
+    (None: never) and whether it is installed (an after_loads bolt of a slope
+    that never stood under its loads is not: it read "no axial force")."""
     if analysis is None or analysis.bolts is None:
         return []
     r = analysis.bolts
@@ -254,6 +255,7 @@ def bolt_summary(analysis) -> list[dict[str, Any]]:
                 "max_utilisation": float(np.max(r.utilisation[k])),
                 "yielded_crossings": int(r.yielded[k].sum()),
                 "first_yield": int(first.min()) if first.size else None,
+                "installed": bool(r.installed is None or r.installed[k].all()),
             }
         )
     return out

@@ -280,6 +280,9 @@ def _print_bolts(doc: dict[str, Any], key: str, title: str) -> None:
         force = b["max_axial_force"]
         sense = "tension" if force > 0 else "compression"
         axial = f"largest axial force {abs(force):.4g}{unit} {sense}" if force else "no axial force"
+        if not b.get("installed", True):
+            out.print(f"  {escape(b['bolt'])}: not installed (installed: after_loads)")
+            continue
         out.print(
             f"  {escape(b['bolt'])}: crosses {_plural(b['crossings'], 'joint')}, {axial} "
             f"({100 * b['max_utilisation']:.0f}% of capacity{state})"
