@@ -242,6 +242,7 @@ def bolt_summary(analysis) -> list[dict[str, Any]]:
     if analysis is None or analysis.bolts is None:
         return []
     r = analysis.bolts
+    installed = getattr(r, "installed", None)
     out = []
     for name in dict.fromkeys(r.name):
         k = r.name == name
@@ -255,7 +256,7 @@ def bolt_summary(analysis) -> list[dict[str, Any]]:
                 "max_utilisation": float(np.max(r.utilisation[k])),
                 "yielded_crossings": int(r.yielded[k].sum()),
                 "first_yield": int(first.min()) if first.size else None,
-                "installed": bool(r.installed is None or r.installed[k].all()),
+                "installed": bool(installed is None or installed[k].all()),
             }
         )
     return out
