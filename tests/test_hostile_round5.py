@@ -202,3 +202,20 @@ def test_a_bolt_never_installed_is_reported_so_not_as_carrying_nothing(tmp_path)
     r = invoke("run", sliding_wedge(tmp_path, bolts=[bolt]), "--json")
     (summary,) = json.loads(r.stdout)["bolt_summary"]
     assert summary["installed"] is True
+
+
+def test_a_bolt_row_that_leaves_the_rock_is_left_out_of_the_pattern(tmp_path):
+    """The row nearest the crest of the wedge, drilled at 195 degrees, runs
+    out of the block's back face into the air before it crosses a joint:
+    the whole bolt pattern failed with "crosses no joint between a free
+    block and another block"; the other rows hold the wedge."""
+    import csv
+
+    bolts = {"capacity": 100, "axial_stiffness": 1.0e4}
+    model = sliding_wedge(tmp_path, stabilisation={"bolts": bolts})
+    r = invoke("stabilise", model, "--out", tmp_path / "o")
+    assert r.exit_code == 0, r.output
+    with (tmp_path / "o" / "measures.csv").open() as fh:
+        (row,) = [row for row in csv.DictReader(fh) if row["kind"] == "bolts"]
+    assert row["reaches_target"] == "True", row
+    assert row["note"].startswith("3 rows of bolts"), row

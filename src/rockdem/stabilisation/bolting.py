@@ -17,8 +17,10 @@ from dataclasses import dataclass
 import numpy as np
 import shapely
 
+from ..bolt_placement import bolts_left_in_rock
 from ..bolts import Bolt
 from ..errors import InputError
+from ..interfaces import find_interfaces
 from ..model import Model
 from ..results import FactorOfSafety
 from . import _progress
@@ -221,6 +223,19 @@ def _search(model, target_fos, rows, count, bolt: dict, length, anchorage) -> Bo
                 **bolt,
             )
             for k, (head, depth) in enumerate(rows)
+        )
+
+    # a row that leaves the rock before it crosses a joint ties nothing: it is
+    # left out (one such row failed the whole pattern, "crosses no joint")
+    anchored, _ = bolts_left_in_rock(pattern(1.0), model.blocks, find_interfaces(model.blocks))
+    names = {b.name for b in anchored}
+    rows = [row for k, row in enumerate(rows) if f"row {k + 1}" in names]
+    if not rows:
+        raise InputError(
+            "stabilisation.bolts",
+            "no bolt from the face of the moving blocks crosses a joint into rock beyond "
+            "them at this angle and length (each leaves the rock first)",
+            "give another angle or length, or bolt the slope by hand (bolts: in the model file)",
         )
 
     def enough(spacing: float) -> bool:
