@@ -219,3 +219,11 @@ def test_a_bolt_row_that_leaves_the_rock_is_left_out_of_the_pattern(tmp_path):
         (row,) = [row for row in csv.DictReader(fh) if row["kind"] == "bolts"]
     assert row["reaches_target"] == "True", row
     assert row["note"].startswith("3 rows of bolts"), row
+
+
+def test_a_pore_pressure_ratio_without_gravity_is_refused(tmp_path):
+    """r_u x the overburden of weightless rock lifted the blocks off:
+    "UNSTABLE: statically admissible forces carry none of the loads", with
+    nothing to say why."""
+    r = invoke("run", two_blocks(tmp_path, loads={"gravity": False, "pore_pressure_ratio": 0.5}))
+    assert_refused(r, "loads.pore_pressure_ratio", "gravity off", "turn gravity on")
