@@ -227,3 +227,30 @@ def test_a_pore_pressure_ratio_without_gravity_is_refused(tmp_path):
     nothing to say why."""
     r = invoke("run", two_blocks(tmp_path, loads={"gravity": False, "pore_pressure_ratio": 0.5}))
     assert_refused(r, "loads.pore_pressure_ratio", "gravity off", "turn gravity on")
+
+
+def test_an_error_of_a_drawn_bolt_names_geometry_bolt_and_the_bolt(tmp_path):
+    """The bolts of a DXF section take `geometry.bolt`; an error of theirs
+    was put at `bolts[0]`, a key the file does not have, on line 1."""
+    import shutil
+
+    from rockdem.exchange.dxf_in import example_dxf
+
+    shutil.copy(example_dxf(), tmp_path / "section.dxf")
+    path = tmp_path / "drawn.yaml"
+    path.write_text(
+        "units: kN, m, kPa\n"
+        "materials: {rock: {unit_weight: 26}}\n"
+        "joints:\n"
+        "  bedding: {normal_stiffness: 1.0e+6, friction_angle: 30}\n"
+        "  cross: {normal_stiffness: 1.0e+6, friction_angle: 35}\n"
+        "geometry:\n"
+        "  dxf: section.dxf\n"
+        "  bolt: {capacity: 200, axial_stiffness: 1.0e+5, pretension: 500}\n"
+        "loads: {water_unit_weight: 9.81}\n"
+    )
+    r = invoke("check", path)
+    assert_refused(r, "drawn.yaml:8: geometry.bolt: drawn bolt 1: pretension 500 exceeds")
+    path.write_text(path.read_text().replace("pretension: 500", "spacing: 1.0e-9"))
+    r = invoke("check", path)
+    assert_refused(r, "drawn.yaml:8: geometry.bolt.spacing: drawn bolt 1: 1e-09 is far below")

@@ -92,13 +92,16 @@ def _loads(cfg: ModelFile, names: dict[str, Loc]):
     )
 
 
-def _bolts(cfg: ModelFile, names: dict[str, Loc]):
+def _bolts(cfg: ModelFile, names: dict[str, Loc], own: int):
+    """The bolts; ``own``: how many the file lists (a drawing's come after
+    them, and their errors go to `geometry.bolt`: they went to a `bolts[0]`
+    the file does not have, at line 1)."""
     from ..bolts import Bolt
 
     bolts = []
     for i, b in enumerate(cfg.bolts):
         name = b.name or _keypath(("bolts", i))
-        names[f"bolts {name}"] = ("bolts", i)
+        names[f"bolts {name}"] = ("bolts", i) if i < own else ("geometry", "bolt")
         fields = b.model_dump(exclude={"name", "bond_strength"})
         bond = np.inf if b.bond_strength is None else b.bond_strength
         bolts.append(Bolt(**fields, bond_strength=bond, name=name))
@@ -172,6 +175,7 @@ def build_model(
     names: dict[str, Loc] = {}
     ids: dict[int, int] = {}  # block id -> position in `blocks`
     own_lines = len(cfg.joint_lines or ())  # a drawing's traces come after them
+    own_bolts = len(cfg.bolts or ())  # and its bolts
     try:
         if cfg.geometry is not None:  # a drawn section: its blocks, as if listed
             from .geometry import with_dxf_blocks
@@ -188,7 +192,7 @@ def build_model(
         else:
             model = _slope_model(cfg, joints, loads, settings, name, max_blocks)
         if cfg.bolts:
-            model = model.replace(bolts=_bolts(cfg, names))
+            model = model.replace(bolts=_bolts(cfg, names, own_bolts))
         _check_free(model, cfg, source, nodes)
         from ..solver import build_system
 

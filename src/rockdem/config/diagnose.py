@@ -187,6 +187,8 @@ def _from_engine(
         loc, label = ("remove", "profile"), ""
     elif bk and bk.group(1) in names:  # a key of a bolt: "bolts NAME spacing"
         loc, label = (*names[bk.group(1)], bk.group(2)), ""
+        if loc[0] == "geometry":  # one of the drawing's: which
+            label = bk.group(1).removeprefix("bolts ") + ":"
     elif j and j.group(1) in cfg.joints:
         loc, label = ("joints", j.group(1), j.group(2)), ""
     elif js and cfg.slope is not None and js.group(1) in cfg.slope.joint_sets:
@@ -203,6 +205,8 @@ def _from_engine(
         label = where
     elif where in names:
         loc, label = names[where], ""
+        if loc[0] == "geometry":  # a bolt of the drawing: which
+            label = where.removeprefix("bolts ") + ":"
     elif where in (  # found by fuzzing
         "loads water_table",
         "loads water_unit_weight",
