@@ -254,3 +254,21 @@ def test_an_error_of_a_drawn_bolt_names_geometry_bolt_and_the_bolt(tmp_path):
     path.write_text(path.read_text().replace("pretension: 500", "spacing: 1.0e-9"))
     r = invoke("check", path)
     assert_refused(r, "drawn.yaml:8: geometry.bolt.spacing: drawn bolt 1: 1e-09 is far below")
+
+
+def test_the_reports_bolt_table_says_a_bolt_never_went_in(tmp_path):
+    """The report's table listed a never-installed bolt with force 0 and
+    utilisation 0%, as a bolt in place that carries nothing."""
+    import warnings
+
+    from rockdem import analyse
+    from rockdem.config import load_model
+    from rockdem.report_tables import bolts_table
+
+    bolt = {"name": "B", "head": [4, 1.5], "angle": 200, "length": 5, "capacity": 100,
+            "axial_stiffness": 1.0e4, "installed": "after_loads"}
+    model, *_ = load_model(sliding_wedge(tmp_path, bolts=[bolt]))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        html = bolts_table(analyse(model))
+    assert "not installed" in html

@@ -135,6 +135,8 @@ def bolts_table(a: Analysis, u: Units = UNKNOWN) -> str:
     if r is None:
         return ""
     use = r.utilisation
+    # an after_loads bolt of a slope that never stood: not a bolt at rest
+    gone = np.zeros(r.n, bool) if r.installed is None else ~r.installed
     rows = [
         [
             str(r.name[k]),
@@ -144,7 +146,7 @@ def bolts_table(a: Analysis, u: Units = UNKNOWN) -> str:
             num(r.shear_force[k], ".4g"),
             num(r.capacity[k], ".4g"),
             f"{100 * use[k]:.0f}%",
-            "yes" if r.yielded[k] else "",
+            "not installed" if gone[k] else "yes" if r.yielded[k] else "",
         ]
         for k in np.argsort(-use, kind="stable")
     ]
