@@ -272,3 +272,21 @@ def test_the_reports_bolt_table_says_a_bolt_never_went_in(tmp_path):
         warnings.simplefilter("ignore")
         html = bolts_table(analyse(model))
     assert "not installed" in html
+
+
+def test_stabilise_overwrite_leaves_no_stage_results_of_the_earlier_model(tmp_path):
+    """Replacing the results of a stabilisation with stages by one of a model
+    without them kept the old stages.csv and stage pictures beside the new
+    stabilisation.json, as this model's; other files stay."""
+    stages = [{"name": "cut", "remove": {"blocks": [2]}}]
+    staged = sliding_wedge(tmp_path, stabilisation={"stages": stages, "target_fos": 0.5})
+    out = tmp_path / "o"
+    r = invoke("stabilise", staged, "--out", out)
+    assert r.exit_code == 0, r.output
+    assert (out / "stages.csv").exists() and (out / "stage-00.png").exists()
+    (out / "notes.txt").write_text("mine")
+    plain = sliding_wedge(tmp_path, stabilisation={"target_fos": 0.5})
+    r = invoke("stabilise", plain, "--out", out, "--overwrite")
+    assert r.exit_code == 0, r.output
+    assert not list(out.glob("stage*")), sorted(p.name for p in out.iterdir())
+    assert (out / "notes.txt").read_text() == "mine" and (out / "stabilisation.json").exists()

@@ -180,9 +180,25 @@ def summary(result) -> dict[str, Any]:
     }
 
 
+#: every file a stabilisation writes (the tables and pictures it has)
+WRITTEN = (
+    "stabilisation.json",
+    "measures.csv",
+    "removal.csv",
+    "designs.csv",
+    "stages.csv",
+    "stage_failures.csv",
+    "trial-[0-9][0-9]*.png",
+    "stage-[0-9][0-9]*.png",
+)
+
+
 def write(folder: Path, result, doc: dict[str, Any], units=None) -> list[Path]:
     """stabilisation.json, one CSV per table (headings with units when the model
-    names them) and the pictures."""
+    names them) and the pictures.  Replacing an earlier stabilisation's
+    results (--overwrite), the files of it that this one does not write go
+    too: its stages.csv and stage pictures stayed beside a study without
+    stages, as if they were this model's (found by hostile testing)."""
     import csv
     import json
 
@@ -190,6 +206,9 @@ def write(folder: Path, result, doc: dict[str, Any], units=None) -> list[Path]:
     from .result_tables import jsonable
     from .stabilisation import save_pictures
 
+    earlier = []
+    if (folder / "stabilisation.json").is_file():
+        earlier = [p for pattern in WRITTEN for p in folder.glob(pattern) if p.is_file()]
     with staged_folder(folder) as tmp:  # all or nothing
         path = tmp / "stabilisation.json"
         path.write_text(json.dumps(jsonable(doc), indent=1, allow_nan=False), encoding="utf-8")
@@ -214,6 +233,9 @@ def write(folder: Path, result, doc: dict[str, Any], units=None) -> list[Path]:
                     )
         save_pictures(result, tmp)
         names = sorted(p.name for p in tmp.iterdir())
+    for path in earlier:
+        if path.name not in names:
+            path.unlink(missing_ok=True)
     return [folder / name for name in names]
 
 
