@@ -290,3 +290,18 @@ def test_stabilise_overwrite_leaves_no_stage_results_of_the_earlier_model(tmp_pa
     assert r.exit_code == 0, r.output
     assert not list(out.glob("stage*")), sorted(p.name for p in out.iterdir())
     assert (out / "notes.txt").read_text() == "mine" and (out / "stabilisation.json").exists()
+
+
+def test_a_bolt_pattern_that_cannot_be_laid_out_says_the_key_and_the_fix(tmp_path):
+    """A row spacing of 1e-6 noted only "1e-06 puts 5,472,135 rows on the
+    5.47 of face to bolt": not which key, nor the spacing to give."""
+    import csv
+
+    bolts = {"capacity": 100, "axial_stiffness": 1.0e4, "row_spacing": 1.0e-6}
+    model = sliding_wedge(tmp_path, stabilisation={"bolts": bolts})
+    r = invoke("stabilise", model, "--out", tmp_path / "o")
+    assert r.exit_code == 0, r.output
+    with (tmp_path / "o" / "measures.csv").open() as fh:
+        (row,) = [row for row in csv.DictReader(fh) if row["kind"] == "bolts"]
+    assert row["note"].startswith("stabilisation.bolts.row_spacing: 1e-06 puts"), row
+    assert "give a row spacing of at least" in row["note"], row

@@ -323,8 +323,8 @@ def _bolt_row(model, target_fos, bolting: dict, width: float, force_unit: str) -
     with _progress.stage(label):
         try:
             p = bolt_pattern(model, target_fos, width=width, **bolting)
-        except InputError as exc:
-            return Measure("bolts", label, 0.0, None, None, False, exc.problem, None)
+        except InputError as exc:  # the whole error: the key and the fix were dropped
+            return Measure("bolts", label, 0.0, None, None, False, str(exc), None)
     cap = f"{bolting['capacity']:.3g}{force_unit}"
     if p.spacing is None:
         note = (
