@@ -178,14 +178,6 @@ class Loads:
             raise InputError(
                 "loads pore_pressure_ratio", f"{ru} is out of range", "use 0 <= r_u < 1"
             )
-        if ru and not self.gravity:  # (found by hostile testing: weightless rock
-            # under r_u x its weight of water was lifted off, "UNSTABLE")
-            raise InputError(
-                "loads pore_pressure_ratio",
-                "is given with gravity off: r_u is a share of the rock's weight, which then "
-                "does not act, and the water lifts the blocks off",
-                "turn gravity on, or leave the ratio out (0)",
-            )
         if ru and self.water_table:
             raise InputError(
                 "loads pore_pressure_ratio",

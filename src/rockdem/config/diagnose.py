@@ -99,11 +99,23 @@ def _warn_unit_weights(model, cfg: ModelFile, source: str, nodes: Any) -> None:
 
 
 def _warn_seismic_without_gravity(model, source: str, nodes: Any) -> None:
-    """Seismic coefficients scale the blocks' weight; with gravity off that
-    force acts with no weight holding the blocks down (found by fuzzing: kh
+    """Seismic coefficients (and a pore-pressure ratio) scale the blocks'
+    weight; with gravity off that force acts with no weight holding the
+    blocks down (found by fuzzing: kh
     0.3 alone, a push of 0.3 W with no normal force, read UNSTABLE)."""
     loads = model.loads
-    if loads.gravity or not (loads.seismic_h or loads.seismic_v):
+    if loads.gravity:
+        return
+    if loads.pore_pressure_ratio:  # (found by hostile testing: weightless rock under
+        # r_u x its weight of water was lifted off, UNSTABLE with nothing said why)
+        line = _line(nodes, ("loads", "pore_pressure_ratio"))
+        where = f"{source}:{line}" if line else source
+        _warn(
+            f"{where}: loads.pore_pressure_ratio with gravity off: the joint water (r_u x "
+            "the weight of the rock above) acts with no weight holding the blocks; set "
+            "`gravity: true`, or leave the ratio out"
+        )
+    if not (loads.seismic_h or loads.seismic_v):
         return
     key = "seismic_h" if loads.seismic_h else "seismic_v"
     line = _line(nodes, ("loads", key))
