@@ -64,8 +64,15 @@ def sliding_wedge(folder: Path, **extra) -> Path:
 def test_a_warning_is_printed_once_per_command(tmp_path):
     """A bolt put in after the loads on a slope that never stands was warned
     about at every support force stabilise tried (11 identical lines)."""
-    bolt = {"name": "B", "head": [4, 1.5], "angle": 200, "length": 5, "capacity": 100,
-            "axial_stiffness": 1.0e4, "installed": "after_loads"}
+    bolt = {
+        "name": "B",
+        "head": [4, 1.5],
+        "angle": 200,
+        "length": 5,
+        "capacity": 100,
+        "axial_stiffness": 1.0e4,
+        "installed": "after_loads",
+    }
     model = sliding_wedge(tmp_path, bolts=[bolt], stabilisation={"target_fos": 1.2})
     r = invoke("stabilise", model, "--out", tmp_path / "o")
     assert r.exit_code == 0, r.output
@@ -98,8 +105,11 @@ def test_a_study_error_a_spreadsheet_would_run_as_a_formula_is_quoted(tmp_path, 
     import csv
 
     points = [{"at": [1, 2], "force": [0, -10]}]
-    study = {"samples": 4, "seed": 0,
-             "inputs": {"loads.points[0].at[0]": {"distribution": "uniform", "min": 0.5, "max": 3}}}
+    study = {
+        "samples": 4,
+        "seed": 0,
+        "inputs": {"loads.points[0].at[0]": {"distribution": "uniform", "min": 0.5, "max": 3}},
+    }
     model = two_blocks(tmp_path, loads={"points": points}, study=study)
     model.rename(tmp_path / "=x.yaml")
     monkeypatch.chdir(tmp_path)
@@ -139,7 +149,9 @@ def test_a_bolt_through_the_grounds_corner_ties_the_block_to_the_ground(tmp_path
     with (out / "bolts.csv").open() as fh:
         crossed = [int(row["interface"]) for row in csv.DictReader(fh)]
     with (out / "interfaces.csv").open() as fh:
-        pairs = {int(row["interface"]): {row["block_a"], row["block_b"]} for row in csv.DictReader(fh)}
+        pairs = {
+            int(row["interface"]): {row["block_a"], row["block_b"]} for row in csv.DictReader(fh)
+        }
     assert [pairs[k] for k in crossed] == [{"2", "4"}, {"0", "2"}]
 
 
@@ -148,8 +160,12 @@ def test_a_bolt_through_a_corner_between_blocks_that_share_no_joint_is_refused(t
     share no joint to tie, and the bolt was tied across the joint 1-2."""
     bolt = {"head": [4, 2], "angle": 206.565051177, "length": 4.4}
     r = invoke("check", four_blocks(tmp_path, bolt))
-    assert_refused(r, "bolts[0]", "from block 4 to block 1 through the corner at (2, 1)",
-                   "move or turn the bolt a little")
+    assert_refused(
+        r,
+        "bolts[0]",
+        "from block 4 to block 1 through the corner at (2, 1)",
+        "move or turn the bolt a little",
+    )
 
 
 def test_a_stage_removing_only_excavated_rock_names_the_stages_by_key(tmp_path):
@@ -161,8 +177,11 @@ def test_a_stage_removing_only_excavated_rock_names_the_stages_by_key(tmp_path):
         {"name": "second", "remove": {"regions": [[[0, 3], [4, 1], [4, 5], [0, 5]]]}},
     ]
     r = invoke("check", sliding_wedge(tmp_path, stabilisation={"stages": stages}))
-    assert_refused(r, "stabilisation.stages[1].remove",
-                   "removes only rock that stages[0] (`first`) already excavated")
+    assert_refused(
+        r,
+        "stabilisation.stages[1].remove",
+        "removes only rock that stages[0] (`first`) already excavated",
+    )
 
 
 def test_a_bolt_of_a_slope_that_stands_is_not_said_never_installed_by_stabilise(tmp_path):
@@ -170,8 +189,15 @@ def test_a_bolt_of_a_slope_that_stands_is_not_said_never_installed_by_stabilise(
     support search tried it at the target 1.3, where it fails, and printed
     that the bolt "was never installed: the slope finds no equilibrium under
     its loads" (of the model, as it read)."""
-    bolt = {"name": "B", "head": [4, 1.5], "angle": 200, "length": 5, "capacity": 1,
-            "axial_stiffness": 1.0e4, "installed": "after_loads"}
+    bolt = {
+        "name": "B",
+        "head": [4, 1.5],
+        "angle": 200,
+        "length": 5,
+        "capacity": 1,
+        "axial_stiffness": 1.0e4,
+        "installed": "after_loads",
+    }
     model = sliding_wedge(tmp_path, bolts=[bolt], stabilisation={"target_fos": 1.3})
     doc = yaml.safe_load(model.read_text())
     doc["joints"]["j"]["friction_angle"] = 29
@@ -189,8 +215,15 @@ def test_a_bolt_never_installed_is_reported_so_not_as_carrying_nothing(tmp_path)
     like a bolt in place that carries nothing."""
     import json
 
-    bolt = {"name": "B", "head": [4, 1.5], "angle": 200, "length": 5, "capacity": 100,
-            "axial_stiffness": 1.0e4, "installed": "after_loads"}
+    bolt = {
+        "name": "B",
+        "head": [4, 1.5],
+        "angle": 200,
+        "length": 5,
+        "capacity": 100,
+        "axial_stiffness": 1.0e4,
+        "installed": "after_loads",
+    }
     model = sliding_wedge(tmp_path, bolts=[bolt])
     r = invoke("run", model)
     assert r.exit_code == 0, r.output
@@ -267,8 +300,15 @@ def test_the_reports_bolt_table_says_a_bolt_never_went_in(tmp_path):
     from rockdem.config import load_model
     from rockdem.report_tables import bolts_table
 
-    bolt = {"name": "B", "head": [4, 1.5], "angle": 200, "length": 5, "capacity": 100,
-            "axial_stiffness": 1.0e4, "installed": "after_loads"}
+    bolt = {
+        "name": "B",
+        "head": [4, 1.5],
+        "angle": 200,
+        "length": 5,
+        "capacity": 100,
+        "axial_stiffness": 1.0e4,
+        "installed": "after_loads",
+    }
     model, *_ = load_model(sliding_wedge(tmp_path, bolts=[bolt]))
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
@@ -307,3 +347,18 @@ def test_a_bolt_pattern_that_cannot_be_laid_out_says_the_key_and_the_fix(tmp_pat
         (row,) = [row for row in csv.DictReader(fh) if row["kind"] == "bolts"]
     assert row["note"].startswith("stabilisation.bolts.row_spacing: 1e-06 puts"), row
     assert "give a row spacing of at least" in row["note"], row
+
+
+def test_a_water_table_below_every_joint_is_warned_about(tmp_path):
+    """A water table at y = -100 under blocks from y = 0 to 2 (elevations in
+    another datum, say) loaded no joint and was accepted without a word."""
+    loads = {"water_table": [[-8, -100], [8, -100]], "water_unit_weight": 9.81}
+    r = invoke("run", two_blocks(tmp_path, loads=loads))
+    assert r.exit_code == 0, r.output
+    (line,) = [s for s in r.stderr.splitlines() if s.startswith("warning:")]
+    assert "loads.water_table lies at or below every joint" in line, line
+    assert "check its levels" in line, line
+    loads["water_table"] = [[-8, -1], [0, 0], [1, 0.5], [2, 0], [8, -1]]  # wets the base
+    r = invoke("run", two_blocks(tmp_path, loads=loads))
+    assert r.exit_code == 0, r.output
+    assert "warning" not in r.stderr, r.stderr

@@ -163,8 +163,7 @@ def _one_per_depth(hit, t, bolt, where, blocks, faces, tree, step):
                 where,
                 f"passes from block {a} to block {b} through the corner at "
                 f"({at[0]:.6g}, {at[1]:.6g}), where they touch at that point only",
-                "move or turn the bolt a little so that it crosses the joints away from "
-                "their ends",
+                "move or turn the bolt a little so that it crosses the joints away from their ends",
             )
         kept.append(join[0])
     return np.array(kept, dtype=hit.dtype)

@@ -16,6 +16,7 @@ from ..interfaces import check_held
 from .diagnose import (
     _from_engine,
     _warn_coincident_joint_lines,
+    _warn_dry_water_table,
     _warn_loose_tolerance,
     _warn_seismic_without_gravity,
     _warn_unit_weights,
@@ -204,6 +205,7 @@ def build_model(
         _warn_unused_lines(system, cfg, own_lines, source, nodes)
         _warn_unit_weights(model, cfg, source, nodes)
         _warn_seismic_without_gravity(model, source, nodes)
+        _warn_dry_water_table(system, source, nodes)
         _warn_coincident_joint_lines(model, source)
     except ModelFileError:
         raise
