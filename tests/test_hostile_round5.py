@@ -362,3 +362,31 @@ def test_a_water_table_below_every_joint_is_warned_about(tmp_path):
     r = invoke("run", two_blocks(tmp_path, loads=loads))
     assert r.exit_code == 0, r.output
     assert "warning" not in r.stderr, r.stderr
+
+
+def test_bolts_put_in_after_the_loads_are_rated_whatever_the_search_starts_at(tmp_path):
+    """With strength_reduction.start 3 the first trial failed the unbolted
+    slope at F = 3, its after_loads bolt was "never installed" (the slope
+    stands at F = 1 and takes it) and the factor was the unbolted one, 1.109
+    for > 86."""
+    import json
+
+    bolt = {
+        "name": "B",
+        "head": [4, 1.5],
+        "angle": 200,
+        "length": 5,
+        "capacity": 100,
+        "axial_stiffness": 1.0e4,
+        "installed": "after_loads",
+    }
+    search = {"strength_reduction": {"start": 3}}
+    model = sliding_wedge(tmp_path, bolts=[bolt], analysis=search)
+    doc = yaml.safe_load(model.read_text())
+    doc["joints"]["j"]["friction_angle"] = 29  # FS 1.109 unbolted
+    model.write_text(yaml.safe_dump(doc, sort_keys=False))
+    r = invoke("fos", model, "--json")
+    assert r.exit_code == 0, r.output
+    doc = json.loads(r.stdout)
+    assert doc["factor_of_safety"] is None and doc["mode"] == "no-failure", doc["bracket"]
+    assert not any("never installed" in w for w in doc["warnings"]), doc["warnings"]
