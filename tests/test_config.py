@@ -476,7 +476,8 @@ def test_unit_weights_that_do_not_fit_the_units_are_warned(tmp_path, change, fra
         "blocks:\n"
         "  - {fixed: true, vertices: [[-5, -1], [5, -1], [5, 0], [-5, 0]]}\n"
         "  - {material: rock, vertices: [[0, 0], [2, 0], [2, 1], [0, 1]]}\n"
-        "loads: {water_unit_weight: 9.81, water_table: [[-5, -0.5], [5, -0.5]]}\n"
+        "loads: {water_unit_weight: 9.81,\n"
+        "        water_table: [[-5, -1], [0, 0], [1, 0.5], [2, 0], [5, -1]]}\n"  # wets the base
     )
 
     def issued(model_text: str) -> list[str]:
