@@ -390,3 +390,22 @@ def test_bolts_put_in_after_the_loads_are_rated_whatever_the_search_starts_at(tm
     doc = json.loads(r.stdout)
     assert doc["factor_of_safety"] is None and doc["mode"] == "no-failure", doc["bracket"]
     assert not any("never installed" in w for w in doc["warnings"]), doc["warnings"]
+
+
+def test_a_cable_given_a_dowel_stiffness_is_refused(tmp_path):
+    """A cable has no dowel action: its shear_stiffness and shear_capacity
+    were dropped without a word."""
+    bolt = {
+        "head": [2, 1.5],
+        "angle": 225,
+        "length": 3,
+        "capacity": 10,
+        "axial_stiffness": 1.0e4,
+        "kind": "cable",
+        "shear_stiffness": 1.0e4,
+    }
+    r = invoke("check", two_blocks(tmp_path, bolts=[bolt]))
+    assert_refused(r, "bolts[0].shear_stiffness: 10000 is given for a cable", "kind: bolt")
+    del bolt["shear_stiffness"]
+    r = invoke("check", two_blocks(tmp_path, bolts=[bolt]))
+    assert r.exit_code == 0, r.output
