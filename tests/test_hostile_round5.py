@@ -409,3 +409,28 @@ def test_a_cable_given_a_dowel_stiffness_is_refused(tmp_path):
     del bolt["shear_stiffness"]
     r = invoke("check", two_blocks(tmp_path, bolts=[bolt]))
     assert r.exit_code == 0, r.output
+
+
+def test_a_study_sample_whose_bolt_never_went_in_has_no_bolt_utilisation(tmp_path):
+    """A sample whose after_loads bolt never went in (the slope never stood)
+    read bolt_utilisation 0, as a bolt in place carrying nothing."""
+    import csv
+
+    bolt = {
+        "name": "B",
+        "head": [4, 1.5],
+        "angle": 200,
+        "length": 5,
+        "capacity": 100,
+        "axial_stiffness": 1.0e4,
+        "installed": "after_loads",
+    }
+    study = {"sweep": {"joints.j.friction_angle": {"values": [20, 40]}}, "compute": "verdict"}
+    out = tmp_path / "o"
+    r = invoke(
+        "study", sliding_wedge(tmp_path, bolts=[bolt], study=study), "--out", out, "--workers", 0
+    )
+    assert r.exit_code == 0, r.output
+    with (out / "samples.csv").open() as fh:
+        use = [row["bolt_utilisation"] for row in csv.DictReader(fh)]
+    assert use[0] == "" and use[1] != "", use

@@ -117,9 +117,13 @@ def evaluate(
 
 
 def _bolt_use(analysis) -> float:
-    """The largest bolt utilisation of an analysis (NaN without bolts or analysis)."""
+    """The largest bolt utilisation of an analysis (NaN without bolts in place
+    or analysis: an after_loads bolt that never went in is none, not 0)."""
     bolts = None if analysis is None else analysis.bolts
-    return float(bolts.utilisation.max()) if bolts is not None and bolts.n else float("nan")
+    if bolts is None or not bolts.n:
+        return float("nan")
+    use = bolts.utilisation if bolts.installed is None else bolts.utilisation[bolts.installed]
+    return float(use.max()) if use.size else float("nan")
 
 
 def _error_row(plan: Plan, sample: int, error: str) -> dict:
