@@ -434,3 +434,21 @@ def test_a_study_sample_whose_bolt_never_went_in_has_no_bolt_utilisation(tmp_pat
     with (out / "samples.csv").open() as fh:
         use = [row["bolt_utilisation"] for row in csv.DictReader(fh)]
     assert use[0] == "" and use[1] != "", use
+
+
+def test_a_contact_off_by_less_than_the_tolerance_is_found_in_either_block_order(tmp_path):
+    """The top of a block bent up 1e-7 at its middle (the tolerance is 1.6e-7)
+    under a flat block: listed first, it was refused ("overlaps block 2 by a
+    sliver deeper than the tolerance", its short edge's line missing the far
+    end of the long edge by 2e-7); listed second, the two rested on each other."""
+    bent = {"material": "rock", "vertices": [[0, 0], [2, 0], [2, 1], [1, 1.0000001], [0, 1]]}
+    flat = {"material": "rock", "vertices": [[0, 1], [2, 1], [2, 2], [0, 2]]}
+    doc = yaml.safe_load(two_blocks(tmp_path).read_text())
+    ground = doc["blocks"][0]
+    for order in ([bent, flat], [flat, bent]):
+        doc["blocks"] = [ground, *order]
+        path = tmp_path / "bent.yaml"
+        path.write_text(yaml.safe_dump(doc, sort_keys=False))
+        r = invoke("run", path)
+        assert r.exit_code == 0, r.output
+        assert "STABLE" in r.stdout
