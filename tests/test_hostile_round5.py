@@ -452,3 +452,15 @@ def test_a_contact_off_by_less_than_the_tolerance_is_found_in_either_block_order
         r = invoke("run", path)
         assert r.exit_code == 0, r.output
         assert "STABLE" in r.stdout
+
+
+def test_the_next_command_after_example_copy_runs_in_a_shell(tmp_path):
+    """Copied into a folder with a space, the hint `next: rockdem check
+    my models/x.yaml` ran `check` on `my`: the path is quoted for the shell."""
+    import shlex
+
+    r = invoke("example", "copy", "bolted-slope", tmp_path / "my models")
+    assert r.exit_code == 0, r.output
+    (line,) = [s for s in r.stdout.splitlines() if s.startswith("next: ")]
+    args = shlex.split(line.removeprefix("next: "))
+    assert args == ["rockdem", "check", str(tmp_path / "my models" / "bolted-slope.yaml")]

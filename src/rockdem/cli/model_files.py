@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import shlex
 from pathlib import Path
 from typing import Annotated
 
@@ -89,4 +90,5 @@ def example_copy(
         _check_out_folder(folder, (), overwrite=overwrite, inputs=[], option="FOLDER")
         target = copy_example(name, folder, overwrite=overwrite)
         out.print(f"copied {name} to {escape(str(target))}")
-        out.print(f"next: rockdem check {escape(str(target))}")
+        # quoted for the shell: a folder with a space split the command in two
+        out.print(f"next: rockdem check {escape(shlex.quote(str(target)))}")
