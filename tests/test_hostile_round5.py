@@ -464,3 +464,28 @@ def test_the_next_command_after_example_copy_runs_in_a_shell(tmp_path):
     (line,) = [s for s in r.stdout.splitlines() if s.startswith("next: ")]
     args = shlex.split(line.removeprefix("next: "))
     assert args == ["rockdem", "check", str(tmp_path / "my models" / "bolted-slope.yaml")]
+
+
+def test_digging_below_the_water_table_is_refused_by_check_and_stops_removal(tmp_path):
+    """A stage, or stabilise's own removal round, that digs below the water
+    table (water on the new face is not modelled) passed `check` and then
+    stopped stabilise mid-run with "loads water_table: is 0.312 above ...",
+    naming no file or key and reporting no other measure."""
+    import csv
+
+    loads = {
+        "water_table": [[-10, -1], [0, 0], [2, 2.5], [4, 0], [10, -1]],
+        "water_unit_weight": 9.81,
+    }
+    stages = [{"name": "dig", "remove": {"blocks": [2]}}]
+    r = invoke("check", sliding_wedge(tmp_path, loads=loads, stabilisation={"stages": stages}))
+    assert_refused(
+        r, "stabilisation.stages[0].remove: loads.water_table: is 0.312 above", "drained"
+    )
+    model = sliding_wedge(tmp_path, loads=loads, stabilisation={"max_removal": 0.9})
+    r = invoke("stabilise", model, "--out", tmp_path / "o")
+    assert r.exit_code == 0, r.output
+    with (tmp_path / "o" / "measures.csv").open() as fh:
+        rows = {row["kind"]: row for row in csv.DictReader(fh)}
+    assert rows["support"]["reaches_target"] == "True", rows
+    assert "would dig below the water table" in rows["removal"]["note"], rows

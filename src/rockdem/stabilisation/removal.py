@@ -246,6 +246,15 @@ def stabilise(
         try:
             cand = _edit.remove_ids(current.model, mech)
         except InputError as exc:
+            if exc.where == "loads.water_table":
+                return _done(
+                    target_fos,
+                    trials,
+                    False,
+                    f"removing the {len(mech)} mechanism blocks would dig below the water "
+                    f"table (the water table {exc.problem.split(' once ')[0]})",
+                    "drainage (a lower water table), support, or a flatter profile (berm)",
+                )
             return _done(
                 target_fos,
                 trials,
