@@ -6,6 +6,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import pytest
 import yaml
 from typer.testing import CliRunner
 
@@ -102,6 +103,7 @@ def test_a_study_error_a_spreadsheet_would_run_as_a_formula_is_quoted(tmp_path, 
     sample of the model file `=x.yaml` begins with its name, and a
     spreadsheet runs it; it is written `'=x.yaml ...` and read back as it was
     (a rerun into the folder continues the study)."""
+    pytest.importorskip("pyarrow")  # rockdem[study]
     import csv
 
     points = [{"at": [1, 2], "force": [0, -10]}]
@@ -414,6 +416,7 @@ def test_a_cable_given_a_dowel_stiffness_is_refused(tmp_path):
 def test_a_study_sample_whose_bolt_never_went_in_has_no_bolt_utilisation(tmp_path):
     """A sample whose after_loads bolt never went in (the slope never stood)
     read bolt_utilisation 0, as a bolt in place carrying nothing."""
+    pytest.importorskip("pyarrow")  # rockdem[study]
     import csv
 
     bolt = {
