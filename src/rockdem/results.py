@@ -336,8 +336,8 @@ class FactorOfSafety:
     mode : str
         ``"strength"`` (a value was found), ``"strength-independent"`` (the
         mechanism forms even with the strengths multiplied by the largest
-        factor tried: toppling or a free block), or ``"no-failure"`` (stable
-        at the largest factor tried).
+        factor tried: toppling, a free block, or joints with c = 0 and
+        phi = 0), or ``"no-failure"`` (stable at the largest factor tried).
     stable_analysis, failed_analysis : Analysis
         The state at the lower end of the bracket and the mechanism at the
         upper end.

@@ -92,8 +92,9 @@ def trust_statements(a: Analysis, fos: FactorOfSafety | None = None) -> list[str
         if fos.mode == "strength-independent":
             out.append(
                 f"The mechanism forms even with the strengths divided by {hi:.4g} ({1 / hi:.3g} "
-                "times their values): toppling or a free block, which strength reduction "
-                "cannot rate; rate it by the support force that holds it (`rockdem stabilise`)."
+                "times their values): toppling, a free block, or joints with no strength to "
+                "scale (c = 0 and phi = 0), which strength reduction cannot rate; rate it by "
+                "the support force that holds it (`rockdem stabilise`)."
             )
     if failed is not None:
         ev = failed.evidence

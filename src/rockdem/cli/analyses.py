@@ -441,8 +441,8 @@ def _print_fos(doc: dict[str, Any]) -> None:
     else:
         out.print(
             "factor of safety: none: the mechanism forms even with the strengths divided by "
-            f"{hi:.4g} ({1 / hi:.3g} times their values: toppling or a free block; strength "
-            "does not control it)"
+            f"{hi:.4g} ({1 / hi:.3g} times their values: toppling, a free block, or joints "
+            "with no strength to scale (c = 0 and phi = 0); strength does not control it)"
         )
     blocks = doc["mechanism_blocks"]
     if blocks:
