@@ -492,3 +492,22 @@ def test_digging_below_the_water_table_is_refused_by_check_and_stops_removal(tmp
         rows = {row["kind"]: row for row in csv.DictReader(fh)}
     assert rows["support"]["reaches_target"] == "True", rows
     assert "would dig below the water table" in rows["removal"]["note"], rows
+
+
+def test_a_load_on_rock_that_remove_takes_says_so(tmp_path):
+    """A point load on the top block, which the file's `remove` takes out:
+    the error said only "does not act on any block"; its fix now names
+    `remove` as well (found in round 5, fixed after it)."""
+    path = two_blocks(
+        tmp_path,
+        remove={"blocks": [2]},
+        loads={"points": [{"at": [1, 2], "force": [0, -10], "name": "P"}]},
+    )
+    assert_refused(
+        invoke("check", path), "loads.points[0]", "does not act on any block", "`remove` takes out"
+    )
+    # without the removal the same load is fine
+    doc = yaml.safe_load(path.read_text())
+    del doc["remove"]
+    path.write_text(yaml.safe_dump(doc, sort_keys=False))
+    assert invoke("check", path).exit_code == 0

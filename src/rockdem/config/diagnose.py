@@ -258,4 +258,13 @@ def _from_engine(
     else:
         label = where
     problem = f"{label} {exc.problem}".strip() if label else exc.problem
-    return ModelFileError(source, _keypath(loc), problem, exc.fix, _line(nodes, loc))
+    fix = exc.fix
+    removes = cfg.remove.blocks or cfg.remove.regions or cfg.remove.profile is not None
+    if removes and any(w in exc.problem for w in _MISSED):
+        # the rock it acted on may be what `remove` took (found by hostile testing)
+        fix = f"{fix}; or, if it acted on rock that `remove` takes out, move it or keep that rock"
+    return ModelFileError(source, _keypath(loc), problem, fix, _line(nodes, loc))
+
+
+#: what a load or support that misses every block is told
+_MISSED = ("does not act on any block", "does not lie on block boundaries")
