@@ -342,7 +342,7 @@ def _explicit_model(cfg: ModelFile, joints, loads, settings, name: str, position
     import shapely
 
     from ..blocks import Blocks
-    from ..geometry.cut import _as_region
+    from ..geometry._topology import as_region
     from ..model import Model
 
     assert cfg.blocks is not None
@@ -353,7 +353,7 @@ def _explicit_model(cfg: ModelFile, joints, loads, settings, name: str, position
         # as a generated slope's excavation would: a region is a valid polygon
         # that takes a block away (found by fuzzing: self-crossing, flat and
         # missing regions were taken silently)
-        region = _as_region(r, f"remove.regions {k}")
+        region = as_region(r, f"remove.regions {k}")
         if not any(region.contains(shapely.Polygon(b.vertices).centroid) for _, b in specs):
             raise InputError(
                 f"remove.regions {k}",

@@ -14,6 +14,7 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
 from ..blocks import GEOMETRY_RTOL
+from ..errors import InputError
 
 log = logging.getLogger(__name__)
 
@@ -336,3 +337,24 @@ def insert_vertices(poly: shapely.Polygon, points: np.ndarray, tol: float) -> sh
     step = np.hypot(*np.diff(np.vstack([xy, xy[:1]]), axis=0).T)
     xy = xy[step > tol]
     return shapely.Polygon(xy)
+
+
+def as_region(region, where: str) -> shapely.Polygon:
+    """A region given as a shapely polygon or its (x, y) vertices, checked:
+    InputError at ``where`` if it is no valid polygon of positive area."""
+    if isinstance(region, shapely.Polygon | shapely.MultiPolygon):
+        poly = region
+    else:
+        try:
+            poly = shapely.Polygon(np.asarray(region, dtype=float))
+        except (TypeError, ValueError) as exc:
+            raise InputError(
+                where, "is not a polygon", "give a shapely Polygon or (x, y) vertices"
+            ) from exc
+    if poly.is_empty or not poly.is_valid or poly.area <= 0:
+        raise InputError(
+            where,
+            "is not a valid polygon (empty, zero area or self-crossing)",
+            "list its vertices in order around it",
+        )
+    return poly

@@ -250,7 +250,7 @@ def generate_slope(
     in_ground = np.zeros(len(faces), dtype=bool)
     region = None
     if fixed_region is not None:
-        region = _move(_as_region(fixed_region, "generate_slope fixed_region"), -ref)
+        region = _move(topo.as_region(fixed_region, "generate_slope fixed_region"), -ref)
         if (
             not shapely.intersects(region, section)
             or shapely.area(shapely.intersection(region, section)) <= tol * extent
@@ -473,25 +473,6 @@ def _check_outlines(polys: np.ndarray, offsets: np.ndarray, tol: float, ref=(0.0
             f"({x:.6g}, {y:.6g}): {flat.size} of them collapse to lines",
             "widen or remove the narrow part of the profile (a spike or a slot)",
         )
-
-
-def _as_region(region, where: str) -> shapely.Polygon:
-    if isinstance(region, shapely.Polygon | shapely.MultiPolygon):
-        poly = region
-    else:
-        try:
-            poly = shapely.Polygon(np.asarray(region, dtype=float))
-        except (TypeError, ValueError) as exc:
-            raise InputError(
-                where, "is not a polygon", "give a shapely Polygon or (x, y) vertices"
-            ) from exc
-    if poly.is_empty or not poly.is_valid or poly.area <= 0:
-        raise InputError(
-            where,
-            "is not a valid polygon (empty, zero area or self-crossing)",
-            "list its vertices in order around it",
-        )
-    return poly
 
 
 def _positive(where: str, value) -> float:

@@ -21,7 +21,7 @@ from ..errors import InputError
 from ..interfaces import find_interfaces
 from ..joints import Joint
 from . import _topology as topo
-from .cut import _as_region
+from ._topology import as_region
 from .profile import Profile
 from .slope import Sliver, SlopeGeometry
 
@@ -77,7 +77,7 @@ def excavate(geom: SlopeGeometry, region, *, where: str = "excavation region") -
         A region that overlaps no free block, that would leave a hole in a
         block, or that would leave a block touching nothing.
     """
-    poly = _as_region(region, where)
+    poly = as_region(region, where)
     blocks = geom.blocks
     polys = blocks.polygons()
     tol = blocks.tolerance
