@@ -41,6 +41,7 @@ from scipy.sparse.csgraph import connected_components
 
 from ..modes import MODES, failure_modes, oriented_mechanism
 from ..results import Analysis, FactorOfSafety
+from .sarma_notes import differences, ids_text
 
 __all__ = ["SarmaFace", "SarmaResult", "sarma"]
 
@@ -192,7 +193,7 @@ def sarma(source: FactorOfSafety | Analysis) -> SarmaResult:
         # bolted-slope: block 45 "slides and topples" in the DEM's tables was
         # said here to "topple"
         said = [
-            f"block(s) {_ids(bad[m])} {m[:-1] if m == 'topples' else 'slide and topple'}"
+            f"block(s) {ids_text(bad[m])} {m[:-1] if m == 'topples' else 'slide and topple'}"
             for m in ("topples", "slides and topples")
             if bad[m]
         ]
@@ -204,7 +205,7 @@ def sarma(source: FactorOfSafety | Analysis) -> SarmaResult:
         return SarmaResult(None, why, None, dem_fos, bodies, ())
     if bad["falls"]:
         why = (
-            f"block(s) {_ids(bad['falls'])} fall free of every contact: there is no "
+            f"block(s) {ids_text(bad['falls'])} fall free of every contact: there is no "
             "sliding surface to rate"
         )
         return SarmaResult(None, why, None, dem_fos, bodies, ())
@@ -318,7 +319,7 @@ def sarma(source: FactorOfSafety | Analysis) -> SarmaResult:
         for i, f in enumerate(face_list)
     )
     result = SarmaResult(fos, "", kc, dem_fos, bodies, faces_out)
-    return replace(result, notes=_notes(result, failed, group, joints))
+    return replace(result, notes=differences(result, failed, group, joints))
 
 
 def _bolt_forces(system, analysis) -> np.ndarray:
@@ -450,85 +451,3 @@ def _largest_root(kc, grid, values) -> float | None:
         if abs(kc(root)) <= 1e-6 * scale:
             return root
     return None
-
-
-def _ids(values, limit=12) -> str:
-    text = ", ".join(str(v) for v in values[:limit])
-    return text + (f", ... ({len(values) - limit} more)" if len(values) > limit else "")
-
-
-def _notes(result: SarmaResult, failed: Analysis, group, joints) -> list[str]:
-    """Where the limit equilibrium and the DEM differ, in words."""
-    notes = []
-    faces = failed.system.interfaces
-    if failed.system.bolts is not None:
-        notes.append(
-            "the bolts act on the LE's bodies with the forces the DEM found in them at its "
-            "last equilibrium below the limit (a bolt not yet at its capacity there may carry "
-            "more as the blocks move)"
-        )
-    current = failed.interfaces.current_name if failed.interfaces.current is not None else None
-    if current is not None:
-        holding = [
-            k
-            for f in result.faces
-            if f.state == "sliding"
-            for k in f.interfaces
-            if current[k] in ("elastic", "closed-failed-earlier")
-        ]
-        if holding:
-            notes.append(
-                f"{len(holding)} interface(s) the LE assumes at limit the DEM found holding "
-                f"below their strength at its limit: {_ids(holding)}"
-            )
-        inside = [
-            int(k)
-            for k in np.flatnonzero(
-                (group[faces.block_a] >= 0) & (group[faces.block_a] == group[faces.block_b])
-            )
-            if current[k] in ("sliding", "open")
-        ]
-        if inside:
-            notes.append(
-                f"{len(inside)} interface(s) inside a rigid body of the LE slide or open in "
-                f"the DEM (the LE treats them as rigid): {_ids(inside)}"
-            )
-    opened = failed.interfaces.open_fraction
-    if opened is not None:
-        part = [
-            (k, opened[k])
-            for f in result.faces
-            if f.state == "sliding"
-            for k in f.interfaces
-            if opened[k] > 0.01
-        ]
-        if part:
-            where = ", ".join(f"{k} ({100 * share:.0f}%)" for k, share in part[:12])
-            notes.append(
-                "the LE assumes the whole of each sliding face in contact; in the DEM part of "
-                f"interface(s) {where} is open and carries no cohesion or friction there "
-                "(the loads' moment lifts it), so its factor can be lower"
-            )
-    brittle = sorted(
-        {
-            joints[faces.joint[k]].name
-            for f in result.faces
-            if f.state == "sliding"
-            for k in f.interfaces
-            if joints[faces.joint[k]].residual_cohesion < joints[faces.joint[k]].cohesion
-            or joints[faces.joint[k]].residual_friction_angle
-            < joints[faces.joint[k]].friction_angle
-        }
-    )
-    if brittle:
-        notes.append(
-            "the LE uses peak strengths; the DEM loses strength where these brittle joints "
-            f"yield ({', '.join(brittle)}), so its factor can be lower"
-        )
-    if any(joints[faces.joint[k]].tensile_strength > 0 for f in result.faces for k in f.interfaces):
-        notes.append("the LE ignores tensile strength, the DEM does not")
-    notes.append(
-        "the LE satisfies force equilibrium of each body only (Sarma's factor); the DEM "
-        "also moment equilibrium and compatible deformation"
-    )
-    return notes
