@@ -1,5 +1,5 @@
-"""The tables of an analysis in the HTML report: the state of the joints,
-the failed interfaces, the unstable blocks, the bolts, the warnings."""
+"""The tables of the HTML report: the inputs, and of an analysis the state of
+the joints, the failed interfaces, the unstable blocks, the bolts, the warnings."""
 
 from __future__ import annotations
 
@@ -11,7 +11,7 @@ from . import plots
 from .modes import boundary_warnings, failure_modes
 from .report_html import esc, html_table, num
 from .results import Analysis, format_factor
-from .units import UNKNOWN, Units
+from .units import UNKNOWN, Units, parse_units
 
 
 def state_counts(a: Analysis) -> str:
@@ -181,3 +181,115 @@ def warnings_html(*analyses: Analysis | None, notes: Sequence[str] = ()) -> str:
     ]
     boxes += [f'<div class="warning">Warning: {esc(t)}</div>' for t in dict.fromkeys(notes)]
     return "".join(boxes)
+
+
+def inputs_section(model, system, units: str | None) -> str:
+    """The report's inputs: the model, its materials, joints and loads."""
+    blocks = system.blocks
+    n_free = int((~blocks.fixed).sum())
+    summary = [
+        ["name", esc(model.name)],
+        ["units", esc(units or "consistent user units (not stated)")],
+        [
+            "section",
+            "2-D: forces and weights are per "
+            + esc(parse_units(units).length or "unit length")
+            + " of slope perpendicular to the section (an area is a volume per "
+            + esc(parse_units(units).length or "unit length")
+            + ")",
+        ],
+        ["blocks", f"{blocks.n_blocks} ({n_free} free, {blocks.n_blocks - n_free} fixed)"],
+        ["interfaces", str(system.interfaces.n_interfaces)],
+        ["spring points", str(system.springs.n_springs)],
+        [
+            "weight of free blocks" + parse_units(units).suffix("force"),
+            num(blocks.weight[~blocks.fixed].sum(), ".5g"),
+        ],
+    ]
+    s = model.settings
+    summary += [
+        ["quadrature", f"{esc(s.quadrature)}, {s.points_per_interface} points per interface"],
+        ["load steps", str(s.load_steps)],
+        ["tolerance", num(s.tolerance, ".1e")],
+    ]
+    out = [html_table(["quantity", "value"], summary, left=1, cls="summary")]
+    used = np.bincount(system.interfaces.joint, minlength=len(model.joints))
+    rows = [
+        [
+            j.name,
+            "yes" if model.ground == k else "",
+            num(j.normal_stiffness, ".4g"),
+            num(j.shear_stiffness, ".4g"),
+            num(j.friction_angle, ".4g"),
+            num(j.cohesion, ".4g"),
+            num(j.tensile_strength, ".4g"),
+            num(j.residual_friction_angle, ".4g"),
+            num(j.residual_cohesion, ".4g"),
+            int(used[k]),
+        ]
+        for k, j in enumerate(model.joints)
+    ]
+    out.append("<h3>Joints</h3>")
+    u = parse_units(units)
+    stiff = ""
+    if u.known:  # kPa/m; t/m^3 rather than t/m^2/m
+        stiff = f" ({u.force}/{u.length}^3)" if "/" in u.stress else f" ({u.stress}/{u.length})"
+    stress = u.suffix("stress")
+    out.append(
+        html_table(
+            [
+                "joint",
+                "ground",
+                "kn" + stiff,
+                "ks" + stiff,
+                "φ (°)",
+                "c" + stress,
+                "tensile" + stress,
+                "φ res. (°)",
+                "c res." + stress,
+                "interfaces",
+            ],
+            rows,
+            left=2,
+            cls="joints",
+        )
+    )
+    ld = model.loads
+    rows = [
+        ["self-weight", "on" if ld.gravity else "off"],
+        ["seismic kh / kv", f"{num(ld.seismic_h)} / {num(ld.seismic_v)}"],
+    ]
+    for k, p in enumerate(ld.points):
+        kind = "support" if p.support else "point load"
+        rows.append(
+            [f"{kind} {p.name or k}", f"({num(p.fx)}, {num(p.fy)}) at ({num(p.x)}, {num(p.y)})"]
+        )
+    for k, line in enumerate(ld.lines):
+        rows.append(
+            [
+                f"line load {line.name or k}",
+                f"({num(line.qx)}, {num(line.qy)})"
+                + (
+                    ""
+                    if line.q_end is None
+                    else f" to ({num(line.q_end[0])}, {num(line.q_end[1])}) (linear)"
+                )
+                + " per length from "
+                f"({num(line.start[0])}, {num(line.start[1])}) to "
+                f"({num(line.end[0])}, {num(line.end[1])})",
+            ]
+        )
+    if ld.water_table:
+        rows.append(
+            [
+                "water table",
+                " - ".join(f"({num(x)}, {num(y)})" for x, y in ld.water_table)
+                + f", water unit weight {num(ld.water_unit_weight)}"
+                + u.suffix("unit_weight", " {}"),
+            ]
+        )
+    if ld.pore_pressure_ratio:
+        rows.append(["pore pressure ratio r_u", num(ld.pore_pressure_ratio)])
+    out.append("<h3>Loads</h3>")
+    out.append(html_table(["load", "value"], rows, left=2, cls="loads"))
+    return "\n".join(out)
