@@ -470,10 +470,8 @@ def test_a_frictional_slope_failing_under_gravity_is_searched_once(monkeypatch):
     Hoek & Bray).  From the unloaded state a smaller sub-step only repeats the
     failed search scaled down: a 1,021-block slope unstable under gravity
     searched four times (1,400 factorisations, 27 s) for one verdict."""
-    from rockdem.analysis import scale_free
-
     model = V.block_on_plane(30.0, rd.Joint(normal_stiffness=1e6, friction_angle=20))
-    assert scale_free(rd.build_system(model))
+    assert rd.build_system(model).scale_free
     a, levels = _load_levels_tried(monkeypatch, model)
     assert not a.stable
     assert levels == [1.0]
@@ -484,11 +482,9 @@ def test_a_cohesive_slope_failing_under_gravity_is_still_sub_stepped(monkeypatch
     holds the block at half the load (net drive 50 kN x (sin 30 - cos 30
     tan 20) / 2 = 4.6 kN < 7 kN) but not at the full load (9.2 kN), so the
     load step is retried in sub-steps and the half load is carried."""
-    from rockdem.analysis import scale_free
-
     joint = rd.Joint(normal_stiffness=1e6, friction_angle=20, cohesion=3.5)
     model = V.block_on_plane(30.0, joint)
-    assert not scale_free(rd.build_system(model))
+    assert not rd.build_system(model).scale_free
     a, levels = _load_levels_tried(monkeypatch, model)
     assert not a.stable
     assert levels[:2] == [1.0, 0.5] and a.load_factor >= 0.5

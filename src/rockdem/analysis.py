@@ -142,19 +142,6 @@ def _evidence(sol: Solve) -> Evidence:
     )
 
 
-def scale_free(system: System) -> bool:
-    """Does the model's response scale with its loads?  True when no strength
-    carries a force scale of its own: no cohesion and no tensile strength
-    (peak or residual) and no bolts.  Then a solution at load ``lam`` from
-    the unloaded state, scaled by ``lam' / lam``, is the solution at
-    ``lam'``, and so is every step of the search for it (tolerances, trust
-    radius, fictitious strength and relaxation are all relative to the
-    loads): a failure there fails at every smaller load too."""
-    s = system.springs
-    strengths = (s.cohesion, s.cohesion_residual, s.tensile, s.tensile_residual)
-    return system.bolts is None and not any(np.any(a) for a in strengths)
-
-
 def _load_step(system, state, q, lam_prev, lam, factor, stage, start=None, prove_first=False):
     """Settle the load at ``lam`` from equilibrium at ``lam_prev``; where the
     whole increment fails and the equilibrium LP does not prove the load
@@ -163,8 +150,8 @@ def _load_step(system, state, q, lam_prev, lam, factor, stage, start=None, prove
 
     A Newton failure on a large increment is not yet a verdict: with brittle
     strength the state jumps at each commit, and smaller increments follow
-    the loading path.  Not from the unloaded state of a :func:`scale_free`
-    model, whose sub-steps repeat the same search scaled down (a 1,021-block
+    the loading path.  Not from the unloaded state of a scale-free model
+    (:attr:`rockdem.solver.System.scale_free`), whose sub-steps repeat the same search scaled down (a 1,021-block
     frictional slope, unstable under gravity: four identical searches, 1,400
     factorisations).  ``start``: an ``Analysis.unloaded_limit`` at this
     load, where the whole step's search starts.  Returns ``(solve, state, q,
@@ -217,7 +204,7 @@ def _load_step(system, state, q, lam_prev, lam, factor, stage, start=None, prove
             cert = certificate_for(system, state, 1.0, factor)
             if cert.proves_failure and cert.mu < lam:
                 break  # proven: no sub-step can carry this load
-        if lam_prev == 0.0 and scale_free(system):
+        if lam_prev == 0.0 and system.scale_free:
             break  # from the unloaded state, every sub-step is this solve scaled down
         if inc <= full / MAX_SUBSTEPS * (1 + 1e-9):
             break

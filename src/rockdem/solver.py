@@ -93,6 +93,19 @@ class System:
     #: bolt and cable crossings of the joints (rockdem.bolts), None without bolts
     bolts: Crossings | None = None
 
+    @property
+    def scale_free(self) -> bool:
+        """Does the model's response scale with its loads?  True when no
+        strength carries a force scale of its own: no cohesion and no tensile
+        strength (peak or residual) and no bolts.  Then a solution at load
+        ``lam`` from the unloaded state, scaled by ``lam' / lam``, is the
+        solution at ``lam'``, and so is every step of the search for it
+        (tolerances, trust radius, fictitious strength and relaxation are all
+        relative to the loads): a failure there fails at every smaller load too."""
+        s = self.springs
+        strengths = (s.cohesion, s.cohesion_residual, s.tensile, s.tensile_residual)
+        return self.bolts is None and not any(np.any(a) for a in strengths)
+
     def __repr__(self) -> str:
         return (
             f"<System: {self.blocks.n_blocks:,} blocks, {self.interfaces.n_interfaces:,} "
