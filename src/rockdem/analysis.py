@@ -151,10 +151,11 @@ def _load_step(system, state, q, lam_prev, lam, factor, stage, start=None, prove
     A Newton failure on a large increment is not yet a verdict: with brittle
     strength the state jumps at each commit, and smaller increments follow
     the loading path.  Not from the unloaded state of a scale-free model
-    (:attr:`rockdem.solver.System.scale_free`), whose sub-steps repeat the same search scaled down (a 1,021-block
-    frictional slope, unstable under gravity: four identical searches, 1,400
-    factorisations).  ``start``: an ``Analysis.unloaded_limit`` at this
-    load, where the whole step's search starts.  Returns ``(solve, state, q,
+    (:attr:`rockdem.solver.System.scale_free`), whose sub-steps repeat the
+    same search scaled down (a 1,021-block frictional slope, unstable under
+    gravity: four identical searches, 1,400 factorisations).  ``start``: an
+    ``Analysis.unloaded_limit`` at this load, where the whole step's search
+    starts.  Returns ``(solve, state, q,
     lam_reached, certificate, unloaded_limit)`` (the certificate of the load
     ``lam`` when it was computed, else None; the limit when the whole step
     failed from the unloaded state, else None).  ``prove_first``: where
