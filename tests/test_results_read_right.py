@@ -899,3 +899,12 @@ def test_layers_riding_on_a_sliding_layer_are_carried_not_at_a_transition(tmp_pa
     assert doc["failure_modes"] == {"slides": [1, 2, 3, 4]}
     assert doc["carried_blocks"] == [2, 3, 4]
     assert not any("partly open" in t for t in trust_statements(fos.stable_analysis, fos))
+
+
+def test_a_csv_writes_no_negative_zero():
+    """An open spring point's stress is -0.0: springs.csv wrote "-0.0"
+    (output review); it is 0.0, as the JSON's numbers are."""
+    from rockdem.output import _csv_value
+
+    assert _csv_value(-0.0) == "0.0" and _csv_value(-1.5) == "-1.5"
+    assert _csv_value(float("-inf")) == "-inf"

@@ -150,8 +150,10 @@ def _write_csv(path: Path, rows: list[dict[str, Any]], columns: list[str], units
 def _csv_value(v: Any) -> Any:
     if isinstance(v, bool):
         return "true" if v else "false"
-    if isinstance(v, float):
-        return repr(v) if math.isfinite(v) else ("inf" if v > 0 else "-inf" if v < 0 else "nan")
+    if isinstance(v, float):  # (-0.0, an open point's stress, is written 0.0)
+        return (
+            repr(v + 0.0) if math.isfinite(v) else ("inf" if v > 0 else "-inf" if v < 0 else "nan")
+        )
     if isinstance(v, str):
         return csv_text(v)
     return v
