@@ -511,3 +511,30 @@ def test_a_load_on_rock_that_remove_takes_says_so(tmp_path):
     del doc["remove"]
     path.write_text(yaml.safe_dump(doc, sort_keys=False))
     assert invoke("check", path).exit_code == 0
+
+
+def test_a_support_the_slope_does_not_need_says_so(tmp_path):
+    """A block on a 20 degree plane (phi 35: FS 1.92) against a target of
+    1.3: the support row read "force bracket 0-0 kN"; it says none is needed."""
+    import numpy as np
+
+    d = np.radians(20)
+    R = np.array([[np.cos(d), -np.sin(d)], [np.sin(d), np.cos(d)]])
+    ground = np.array([(-10, 0), (10, 0), (10, -3), (-10, -3)]) @ R.T
+    block = np.array([(0, 0), (2, 0), (2, 1), (0, 1)]) @ R.T
+    doc = {
+        "units": "kN, m, kPa",
+        "joints": {"j": {"normal_stiffness": 1.0e6, "friction_angle": 35}},
+        "blocks": [
+            {"fixed": True, "vertices": ground.tolist()},
+            {"unit_weight": 25, "vertices": block.tolist()},
+        ],
+        "stabilisation": {"support": {"angle": 10}},
+    }
+    path = tmp_path / "met.yaml"
+    path.write_text(yaml.safe_dump(doc, sort_keys=False))
+    r = invoke("stabilise", path, "--out", tmp_path / "out")
+    assert r.exit_code == 0, r.output
+    text = (tmp_path / "out" / "measures.csv").read_text()
+    assert "none needed: the slope meets the target without it" in text
+    assert "force bracket 0-0" not in text

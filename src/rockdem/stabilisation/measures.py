@@ -268,9 +268,11 @@ def compare_measures(
             )
             rows.append(Measure("support", "support force", 0.0, None, None, False, note, None))
         else:
+            lo, hi = search.bracket
             note = (
-                f"at {at}, angle {search.angle:g}; force bracket {search.bracket[0]:.3g}"
-                f"-{search.bracket[1]:.3g}{force_unit}"
+                f"at {at}, angle {search.angle:g}; force bracket {lo:.3g}-{hi:.3g}{force_unit}"
+                if hi > 0  # (none needed: "force bracket 0-0 kN", hostile round 5)
+                else f"none needed: the slope meets the target without it (at {at})"
             )
             rows.append(
                 Measure(
@@ -335,7 +337,8 @@ def _bolt_row(model, target_fos, bolting: dict, width: float, force_unit: str) -
     lengths = sorted(b.length for b in p.bolts)
     widest = " (the widest tried)" if not np.isfinite(p.bracket[0]) else ""
     note = (
-        f"{len(p.bolts)} rows of bolts ({cap} capacity), one every {p.spacing:.3g} along "
+        f"{len(p.bolts)} row{'s' if len(p.bolts) != 1 else ''} of bolts ({cap} capacity), "
+        f"one every {p.spacing:.3g} along "
         f"the slope{widest}, {lengths[0]:.3g} to {lengths[-1]:.3g} long: "
         f"{p.bolts_per_metre:.3g} bolts per unit length of slope"
     )
