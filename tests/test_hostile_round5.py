@@ -538,3 +538,24 @@ def test_a_support_the_slope_does_not_need_says_so(tmp_path):
     text = (tmp_path / "out" / "measures.csv").read_text()
     assert "none needed: the slope meets the target without it" in text
     assert "force bracket 0-0" not in text
+
+
+def test_bolts_csv_says_which_bolts_are_in(tmp_path):
+    """An after_loads bolt that never went in: bolts.csv showed its rows with
+    force 0 and nothing to say why; its rows now read installed false."""
+    import csv
+
+    bolt = {
+        "name": "B",
+        "head": [4, 1.5],
+        "angle": 200,
+        "length": 5,
+        "capacity": 100,
+        "axial_stiffness": 1.0e4,
+        "installed": "after_loads",
+    }
+    r = invoke("run", sliding_wedge(tmp_path, bolts=[bolt]), "--out", tmp_path / "o")
+    assert r.exit_code == 0, r.output
+    text = (tmp_path / "o" / "bolts.csv").read_text().splitlines()
+    rows = list(csv.DictReader(text))
+    assert rows and all(row["installed"] == "false" for row in rows)

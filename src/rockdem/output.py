@@ -192,7 +192,8 @@ _COLUMNS = {
         "current_state first_failure local_fos".split()
     ),
     "bolts": list(
-        "bolt interface x y depth extension offset axial_force shear_force axial_capacity "
+        "bolt installed interface x y depth extension offset axial_force shear_force "
+        "axial_capacity "
         "utilisation yielded first_yield".split()
     ),
 }

@@ -188,15 +188,20 @@ def analysis_tables(analysis, failed=None) -> dict[str, list[dict[str, Any]]]:
 
 
 def bolt_rows(analysis) -> list[dict[str, Any]]:
-    """One row per joint a bolt crosses: force per bolt, capacity there,
-    utilisation and whether it yielded (empty without bolts)."""
+    """One row per joint a bolt crosses: whether it is in the slope, force
+    per bolt, capacity there, utilisation and whether it yielded (empty
+    without bolts)."""
     r = analysis.bolts
     if r is None:
         return []
     use = r.utilisation
+    # an after_loads bolt that never went in read force 0 with nothing to say
+    # why (hostile round 5); a table built without it is of bolts all in
+    installed = getattr(r, "installed", None)
     return [
         {
             "bolt": str(r.name[k]),
+            "installed": bool(installed is None or installed[k]),
             "interface": int(r.interface[k]),
             "x": float(r.point[k, 0]),
             "y": float(r.point[k, 1]),
