@@ -413,3 +413,17 @@ def test_fos_drawing_has_the_slip_surface_of_the_limit(water_fos, tmp_path):
     path = write_dxf(tmp_path / "r.dxf", a.system.model, a, failed=failed)
     lines = ezdxf.readfile(path).modelspace().query('LINE[layer=="SLIP_SURFACE"]')
     assert len(failed.slip_surface) > 0 and len(lines) == len(failed.slip_surface)
+
+
+def test_the_stress_plot_of_a_standing_slope_is_not_the_open_crack(water_model):
+    """plane-failure-water stands at F = 1 (no slip surface): `rockdem plot
+    --what stress` drew its only failed interface, the tension crack, wholly
+    open: zeros.  The default now passes over failed interfaces that carry
+    nothing and takes the joint closest to failure: the sliding plane."""
+    from rockdem.plots.stress import select_interfaces
+
+    a = rd.analyse(water_model)
+    assert a.stable and not len(a.slip_surface)
+    chosen = select_interfaces(a)
+    stress = a.interfaces.normal_stress[chosen]
+    assert (stress > 1.0).any()  # the plane carries the block (63.8 kPa mean)

@@ -51,8 +51,10 @@ def select_interfaces(a, joint=None, interfaces: Sequence[int] | None = None) ->
     Returns
     -------
     ndarray of int
-        Default: the slip surface, else the failed interfaces, else the
-        interfaces of the joint with the smallest local factor of safety.
+        Default: the slip surface, else the failed interfaces that still
+        carry load (not wholly open), else the interfaces of the joint with
+        the smallest local factor of safety.  (An open tension crack, all
+        zeros, was drawn for a plane failure that stands at F = 1.)
     """
     system = a.system
     faces = system.interfaces
@@ -77,8 +79,10 @@ def select_interfaces(a, joint=None, interfaces: Sequence[int] | None = None) ->
         return np.flatnonzero(ok)
     if len(a.slip_surface):
         return np.asarray(a.slip_surface, dtype=int)
-    if len(a.failed_interfaces):
-        return a.failed_interfaces
+    failed = np.asarray(a.failed_interfaces, dtype=int)
+    carrying = failed[a.interfaces.open_fraction[failed] < 1.0] if failed.size else failed
+    if carrying.size:
+        return carrying
     fos = np.where(np.isfinite(a.interfaces.local_fos), a.interfaces.local_fos, np.inf)
     if not len(fos):
         return np.zeros(0, dtype=int)
