@@ -62,18 +62,24 @@ def sliding_wedge(folder: Path, **extra) -> Path:
     return path
 
 
-def test_a_warning_is_printed_once_per_command(tmp_path):
-    """A bolt put in after the loads on a slope that never stands was warned
-    about at every support force stabilise tried (11 identical lines)."""
-    bolt = {
+def late_bolt(capacity: float = 100) -> dict:
+    """Bolt B of the sliding wedge, put in after the loads (angle 200 from
+    its head on the upper block, 5 long, axial stiffness 1e4)."""
+    return {
         "name": "B",
         "head": [4, 1.5],
         "angle": 200,
         "length": 5,
-        "capacity": 100,
+        "capacity": capacity,
         "axial_stiffness": 1.0e4,
         "installed": "after_loads",
     }
+
+
+def test_a_warning_is_printed_once_per_command(tmp_path):
+    """A bolt put in after the loads on a slope that never stands was warned
+    about at every support force stabilise tried (11 identical lines)."""
+    bolt = late_bolt()
     model = sliding_wedge(tmp_path, bolts=[bolt], stabilisation={"target_fos": 1.2})
     r = invoke("stabilise", model, "--out", tmp_path / "o")
     assert r.exit_code == 0, r.output
@@ -191,15 +197,7 @@ def test_a_bolt_of_a_slope_that_stands_is_not_said_never_installed_by_stabilise(
     support search tried it at the target 1.3, where it fails, and printed
     that the bolt "was never installed: the slope finds no equilibrium under
     its loads" (of the model, as it read)."""
-    bolt = {
-        "name": "B",
-        "head": [4, 1.5],
-        "angle": 200,
-        "length": 5,
-        "capacity": 1,
-        "axial_stiffness": 1.0e4,
-        "installed": "after_loads",
-    }
+    bolt = late_bolt(capacity=1)
     model = sliding_wedge(tmp_path, bolts=[bolt], stabilisation={"target_fos": 1.3})
     doc = yaml.safe_load(model.read_text())
     doc["joints"]["j"]["friction_angle"] = 29
@@ -217,15 +215,7 @@ def test_a_bolt_never_installed_is_reported_so_not_as_carrying_nothing(tmp_path)
     like a bolt in place that carries nothing."""
     import json
 
-    bolt = {
-        "name": "B",
-        "head": [4, 1.5],
-        "angle": 200,
-        "length": 5,
-        "capacity": 100,
-        "axial_stiffness": 1.0e4,
-        "installed": "after_loads",
-    }
+    bolt = late_bolt()
     model = sliding_wedge(tmp_path, bolts=[bolt])
     r = invoke("run", model)
     assert r.exit_code == 0, r.output
@@ -302,15 +292,7 @@ def test_the_reports_bolt_table_says_a_bolt_never_went_in(tmp_path):
     from rockdem.config import load_model
     from rockdem.report_tables import bolts_table
 
-    bolt = {
-        "name": "B",
-        "head": [4, 1.5],
-        "angle": 200,
-        "length": 5,
-        "capacity": 100,
-        "axial_stiffness": 1.0e4,
-        "installed": "after_loads",
-    }
+    bolt = late_bolt()
     model, *_ = load_model(sliding_wedge(tmp_path, bolts=[bolt]))
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
@@ -373,15 +355,7 @@ def test_bolts_put_in_after_the_loads_are_rated_whatever_the_search_starts_at(tm
     for > 86."""
     import json
 
-    bolt = {
-        "name": "B",
-        "head": [4, 1.5],
-        "angle": 200,
-        "length": 5,
-        "capacity": 100,
-        "axial_stiffness": 1.0e4,
-        "installed": "after_loads",
-    }
+    bolt = late_bolt()
     search = {"strength_reduction": {"start": 3}}
     model = sliding_wedge(tmp_path, bolts=[bolt], analysis=search)
     doc = yaml.safe_load(model.read_text())
@@ -419,15 +393,7 @@ def test_a_study_sample_whose_bolt_never_went_in_has_no_bolt_utilisation(tmp_pat
     pytest.importorskip("pyarrow")  # rockdem[study]
     import csv
 
-    bolt = {
-        "name": "B",
-        "head": [4, 1.5],
-        "angle": 200,
-        "length": 5,
-        "capacity": 100,
-        "axial_stiffness": 1.0e4,
-        "installed": "after_loads",
-    }
+    bolt = late_bolt()
     study = {"sweep": {"joints.j.friction_angle": {"values": [20, 40]}}, "compute": "verdict"}
     out = tmp_path / "o"
     r = invoke(
@@ -545,15 +511,7 @@ def test_bolts_csv_says_which_bolts_are_in(tmp_path):
     force 0 and nothing to say why; its rows now read installed false."""
     import csv
 
-    bolt = {
-        "name": "B",
-        "head": [4, 1.5],
-        "angle": 200,
-        "length": 5,
-        "capacity": 100,
-        "axial_stiffness": 1.0e4,
-        "installed": "after_loads",
-    }
+    bolt = late_bolt()
     r = invoke("run", sliding_wedge(tmp_path, bolts=[bolt]), "--out", tmp_path / "o")
     assert r.exit_code == 0, r.output
     text = (tmp_path / "o" / "bolts.csv").read_text().splitlines()
