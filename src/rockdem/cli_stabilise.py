@@ -201,6 +201,7 @@ def write(folder: Path, result, doc: dict[str, Any], units=None) -> list[Path]:
     stages, as if they were this model's (found by hostile testing)."""
     import csv
     import json
+    import re
 
     from .output import column_units, csv_header, csv_text, staged_folder
     from .result_tables import jsonable
@@ -208,7 +209,14 @@ def write(folder: Path, result, doc: dict[str, Any], units=None) -> list[Path]:
 
     earlier = []
     if (folder / "stabilisation.json").is_file():
-        earlier = [p for pattern in WRITTEN for p in folder.glob(pattern) if p.is_file()]
+        # only the names this writes: a glob took a user's 'trial-00-marked.png' too
+        ours = re.compile(r"(trial|stage)-\d{2,}\.png")
+        earlier = [
+            p
+            for pattern in WRITTEN
+            for p in folder.glob(pattern)
+            if p.is_file() and ("*" not in pattern or ours.fullmatch(p.name))
+        ]
     with staged_folder(folder) as tmp:  # all or nothing
         path = tmp / "stabilisation.json"
         path.write_text(json.dumps(jsonable(doc), indent=1, allow_nan=False), encoding="utf-8")
