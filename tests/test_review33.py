@@ -51,3 +51,27 @@ def test_stabilise_overwrite_keeps_a_users_file_named_like_a_picture(tmp_path):
     assert r.exit_code == 0, r.output
     assert (out / "trial-00-marked.png").read_bytes() == b"mine"
     assert (out / "stage-01 copy.png").read_bytes() == b"mine"
+
+
+def test_an_unnamed_bolt_left_by_a_stage_keeps_its_yield_history():
+    """bolts_left_in_rock names an unnamed bolt that stays (``bolt 2``) with
+    dataclasses.replace, a new object; the stage's carry matched bolts by
+    identity, so the unnamed bolt lost its history: first yield at the
+    excavation stage, not in load step 1 (as a named one keeps it)."""
+    from dataclasses import replace
+
+    import numpy as np
+    import pytest
+
+    import rockdem as rd
+    from rockdem.stabilisation import Stage, excavate_in_stages
+    from test_stabilisation import _two_blocks_and_a_yielding_bolt
+
+    named = _two_blocks_and_a_yielding_bolt()
+    model = named.replace(bolts=tuple(replace(b, name="") for b in named.bolts))
+    with pytest.warns(rd.ModelWarning, match=r"bolt 2 removed with its rock"):
+        ex = excavate_in_stages(model, [Stage("cut", blocks=(2,))])
+    before, after = ex.stages[0].analysis, ex.stages[1].analysis
+    assert before.bolts.first_yield.tolist() == [1, -1]
+    assert [b.name for b in ex.stages[1].model.bolts] == ["bolt 1"]
+    assert after.stable and np.asarray(after.bolts.first_yield).tolist() == [1]

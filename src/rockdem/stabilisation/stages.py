@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import warnings
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -185,9 +185,15 @@ def _carry_bolts(old: System, state: SpringState, new: System, matched: dict):
     reference = new.bolts.initial_reference()
     if old.bolts is None or state.bolt_first_yield is None:
         return first, reference
-    # the same Bolt objects (a removal drops some: positions shift)
+    # the same Bolt objects (a removal drops some: positions shift); an unnamed
+    # bolt that stays is a copy named by its place (bolts_left_in_rock): it
+    # lost its history, yielding anew at the stage (review 33)
     position = {id(b): k for k, b in enumerate(new.model.bolts)}
     renumber = [position.get(id(b), -1) for b in old.model.bolts]
+    for k, b in enumerate(old.model.bolts):
+        if renumber[k] < 0 and not b.name:
+            copy = replace(b, name=f"bolt {k + 1}")
+            renumber[k] = next((m for m, c in enumerate(new.model.bolts) if c == copy), -1)
     where = {
         (renumber[b], int(i)): c
         for c, (b, i) in enumerate(zip(old.bolts.bolt, old.bolts.interface, strict=True))
