@@ -75,3 +75,29 @@ def test_an_unnamed_bolt_left_by_a_stage_keeps_its_yield_history():
     assert before.bolts.first_yield.tolist() == [1, -1]
     assert [b.name for b in ex.stages[1].model.bolts] == ["bolt 1"]
     assert after.stable and np.asarray(after.bolts.first_yield).tolist() == [1]
+
+
+def test_a_removal_leaving_only_rock_lighter_than_water_is_not_said_to_dig_below_it():
+    """_back wrapped every error of check_water_table as the water table
+    'once this rock is removed (it digs below the water table)', also the
+    unit-weight check it runs first: removing the only heavy block read as
+    digging below the water table, with the fix 'remove less, or lower the
+    water table'."""
+    import pytest
+
+    import rockdem as rd
+    from rockdem.errors import InputError
+    from rockdem.stabilisation import _edit
+
+    g = [(-5, -2), (10, -2), (10, 0), (-5, 0)]
+    b1 = [(0, 0), (2, 0), (2, 1), (0, 1)]
+    b2 = [(3, 0), (5, 0), (5, 1), (3, 1)]
+    blocks = rd.Blocks.from_polygons(
+        [g, b1, b2], fixed=[True, False, False], unit_weight=[20, 25, 5]
+    )
+    loads = rd.Loads(water_table=((-5, -0.5), (10, -0.5)), water_unit_weight=9.81)
+    model = rd.Model(blocks, rd.Joint(normal_stiffness=1e6, friction_angle=35), loads=loads)
+    with pytest.raises(InputError) as info:
+        _edit.remove_ids(model, [1])
+    assert "water_unit_weight" in info.value.where
+    assert "below the water table" not in str(info.value)

@@ -49,6 +49,12 @@ def _back(model: Model, geom) -> Model:
         # water table passed `check`, then stopped stabilise naming no file or key)
         check_water_table(out.blocks, geom.interfaces(), loads)
     except InputError as exc:
+        if exc.where != "loads water_table":  # the unit-weight check: not a dig (review 33)
+            raise InputError(
+                exc.where.replace(" ", ".", 1),
+                f"{exc.problem}, once this rock is removed",
+                exc.fix,
+            ) from None
         raise InputError(
             "loads.water_table",
             f"{exc.problem} once this rock is removed (it digs below the water table)",
