@@ -101,3 +101,29 @@ def test_a_removal_leaving_only_rock_lighter_than_water_is_not_said_to_dig_below
         _edit.remove_ids(model, [1])
     assert "water_unit_weight" in info.value.where
     assert "below the water table" not in str(info.value)
+
+
+def test_a_bolt_through_a_reflex_corner_of_one_block_crosses_no_joint_there():
+    """A bolt through the inner corner of an L-shaped block, where the joints
+    to the block in its notch end, has that block on both sides: it was
+    refused as passing 'from block 1 to block 1 through the corner' (and
+    before the corner rule tied the block to its neighbour there); it
+    crosses only the joint into the ground."""
+    import numpy as np
+
+    import rockdem as rd
+    from rockdem.bolts import Bolt
+    from rockdem.solver import build_system
+
+    g = [(-5, -2), (10, -2), (10, 0), (-5, 0)]
+    a = [(0, 0), (4, 0), (4, 1), (2, 1), (2, 3), (0, 3)]
+    b = [(2, 1), (4, 1), (4, 3), (2, 3)]
+    blocks = rd.Blocks.from_polygons([g, a, b], fixed=[True, False, False], unit_weight=25)
+    angle = float(np.degrees(np.arctan2(-2, 1.5)))  # through (2, 1) into the ground
+    bolt = Bolt(head=(0.5, 3.0), angle=angle, length=4.5, capacity=100, axial_stiffness=1e4)
+    model = rd.Model(blocks, rd.Joint(normal_stiffness=1e6, friction_angle=35), bolts=(bolt,))
+    system = build_system(model)
+    faces, c = system.interfaces, system.bolts
+    pairs = {(int(faces.block_a[i]), int(faces.block_b[i])) for i in c.interface}
+    assert pairs == {(0, 1)}
+    np.testing.assert_allclose(c.point, [[2.75, 0.0]], atol=1e-9)

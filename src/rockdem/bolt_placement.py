@@ -138,15 +138,12 @@ def _one_per_depth(hit, t, bolt, where, blocks, faces, tree, step):
     was kept: one through the ground's corner tied two free blocks instead,
     found by hostile testing).  InputError where no interface joins them (the
     blocks touch only at that corner)."""
-    if len(hit) < 2:
+    if not len(hit):
         return hit
     group = np.concatenate([[0], np.cumsum(np.diff(t[hit]) * bolt.length > blocks.tolerance)])
     kept = []
     for g in range(group[-1] + 1):
         mine = hit[group == g]
-        if len(mine) == 1:
-            kept.append(mine[0])
-            continue
         at = np.asarray(bolt.head) + t[mine[0]] * bolt.length * bolt.direction
         sides = [
             tree.query(shapely.points(at + sign * step * bolt.direction), predicate="within")
@@ -156,6 +153,15 @@ def _one_per_depth(hit, t, bolt, where, blocks, faces, tree, step):
             kept.append(mine[0])  # air or a face on one side: crosses nothing here
             continue
         pair = {int(sides[0][0]), int(sides[1][0])}
+        if len(pair) == 1:
+            # the same block on both sides: through a reflex corner of it, where
+            # joints end, the bolt crosses none (it was refused as passing "from
+            # block 1 to block 1", and before that tied the block to its
+            # neighbour at that corner; review 33)
+            continue
+        if len(mine) == 1:
+            kept.append(mine[0])
+            continue
         join = [k for k in mine if {int(faces.block_a[k]), int(faces.block_b[k])} == pair]
         if not join:
             a, b = (int(blocks.ids[side[0]]) for side in sides)
