@@ -127,3 +127,36 @@ def test_a_bolt_through_a_reflex_corner_of_one_block_crosses_no_joint_there():
     pairs = {(int(faces.block_a[i]), int(faces.block_b[i])) for i in c.interface}
     assert pairs == {(0, 1)}
     np.testing.assert_allclose(c.point, [[2.75, 0.0]], atol=1e-9)
+
+
+def test_stable_at_puts_after_loads_bolts_into_the_standing_slope():
+    """stable_at (the trials of the bolt-pattern and support searches) ran
+    the staged analysis at the target factor: a slope that stands at F = 1
+    but not at the target unbolted never received its after_loads bolts, so
+    a pattern rated FS 2.42 by factor_of_safety read 'not stable at 1.5'
+    and stabilisation.bolts with installed: after_loads never found one."""
+    import warnings
+    from dataclasses import replace
+
+    import numpy as np
+
+    import rockdem as rd
+    from rockdem import verification as V
+    from rockdem.bolts import Bolt
+    from rockdem.stabilisation.removal import stable_at
+
+    R = V._rot(-25)
+    ground = np.array([(-8, -2), (12, -2), (12, 0), (-8, 0)]) @ R.T
+    block = np.array([(0, 0), (4, 0), (4, 1.5), (0, 1.5)]) @ R.T
+    blocks = rd.Blocks.from_polygons([ground, block], fixed=[True, False], unit_weight=25)
+    head = tuple(R @ np.array([2.0, 1.5]))
+    bolt = Bolt(head=head, angle=205.0, length=4.0, capacity=50, axial_stiffness=1e4,
+                spacing=2.0, installed="after_loads")  # fmt: skip
+    model = rd.Model(blocks, rd.Joint(normal_stiffness=1e6, friction_angle=30), bolts=(bolt,))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        fos = rd.factor_of_safety(model, width=0.01)
+        assert fos.value is not None and fos.bracket[0] > 1.5  # unbolted: 1.24
+        assert stable_at(model, 1.5)
+        unbolted = model.replace(bolts=(replace(bolt, capacity=1e-6),))
+        assert not stable_at(unbolted, 1.5)

@@ -364,5 +364,20 @@ def stable_at(model: Model, factor: float) -> bool:
     """True when the staged analysis finds equilibrium with strengths divided by
     ``factor``: a trial of a search, so without the mechanism of a failure
     and its warnings (an after_loads bolt of a slope that stands was said
-    "never installed" because a trial at the target failed)."""
-    return analyse(model, strength_factor=factor, show_mechanism=False).stable
+    "never installed" because a trial at the target failed).  Bolts to go in
+    after the loads go into the slope at its own strength (F = 1), as in
+    :func:`~rockdem.factor_of_safety`, and the strengths are reduced from
+    there: analysed at the target they never went into a slope that needs
+    them (a pattern rated 2.42 read "not stable at 1.5"; review 33)."""
+    from ..solver import build_system
+    from ..strength_reduction import _continue
+
+    system = build_system(model)
+    late = system.bolts is not None and bool(np.any(system.bolts.late))
+    if not late or factor <= 1.0:
+        return analyse(system, strength_factor=factor, show_mechanism=False).stable
+    first = analyse(system, strength_factor=1.0, show_mechanism=False)
+    if not first.stable:
+        return False
+    stage = max(step.stage for step in first.steps) + 1
+    return _continue(system, first, factor, stage)[0].stable
