@@ -152,17 +152,13 @@ class _SyncCancelFilter(logging.Filter):
         )
 
 
+#: installed for the rest of the process by the first study on Dask: the
+#: callback may run after the study has returned, while "interrupted" is printed
+_CANCEL_FILTER = _SyncCancelFilter()
+
+
 def run_on_dask(plan, todo, on_row, client, workers) -> int:
-    tornado_log = logging.getLogger("tornado.application")
-    cancel_filter = _SyncCancelFilter()
-    tornado_log.addFilter(cancel_filter)
-    try:
-        return _run_on_dask(plan, todo, on_row, client, workers)
-    finally:
-        tornado_log.removeFilter(cancel_filter)
-
-
-def _run_on_dask(plan, todo, on_row, client, workers) -> int:
+    logging.getLogger("tornado.application").addFilter(_CANCEL_FILTER)  # (once)
     dd = import_dask()
     todo = list(todo)
     c, own = _client(client, workers, len(todo))
