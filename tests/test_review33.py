@@ -160,3 +160,28 @@ def test_stable_at_puts_after_loads_bolts_into_the_standing_slope():
         assert stable_at(model, 1.5)
         unbolted = model.replace(bolts=(replace(bolt, capacity=1e-6),))
         assert not stable_at(unbolted, 1.5)
+
+
+def test_a_bolt_pattern_whose_4_rows_all_miss_tries_8(monkeypatch):
+    """The pattern search raised at once when none of its 4 rows crossed a
+    joint into rock beyond the mechanism, although 8 or 16 rows, at other
+    points of the face, might anchor (review 33).  Here the 4-row search is
+    made to find no anchored row: the 8-row one designs the pattern."""
+    from rockdem.config import load_model
+    from rockdem.errors import InputError
+    from rockdem.examples import example_path
+    from rockdem.stabilisation import bolting
+
+    model, _ = load_model(example_path("perpendicular-joints"))
+    search, tried = bolting._search, []
+
+    def first_misses(model, target, rows, *args):
+        tried.append(len(rows))
+        if len(tried) == 1:
+            raise InputError("stabilisation.bolts", "no bolt crosses a joint", "(test)")
+        return search(model, target, rows, *args)
+
+    monkeypatch.setattr(bolting, "_search", first_misses)
+    p = bolting.bolt_pattern(model, 1.1, capacity=2.0, axial_stiffness=1e4)
+    assert tried[0] == 4 and tried[1] == 8
+    assert p.spacing is not None and p.fos.value >= 1.1

@@ -191,13 +191,19 @@ def bolt_pattern(
     tried = ROW_COUNTS if row_spacing is None else (None,)
     count = 0
     result = None
+    unanchored = None
     for n_rows in tried:
         rows = face_rows(model, mech, row_spacing=row_spacing, angle=angle, n_rows=n_rows or 4)
-        result = _search(model, target_fos, rows, count, bolt, length, anchorage)
+        try:
+            result = _search(model, target_fos, rows, count, bolt, length, anchorage)
+        except InputError as exc:  # no row of these anchors: more rows may (review 33)
+            unanchored = exc
+            continue
         count = result.evaluations
         if result.spacing is not None:
             break
-    assert result is not None
+    if result is None:
+        raise unanchored
     if result.spacing is None:
         return result
     with _progress.stage("rating the bolt pattern"):
