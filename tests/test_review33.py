@@ -2,39 +2,7 @@
 
 from __future__ import annotations
 
-from pathlib import Path
-
-import yaml
-from typer.testing import CliRunner
-
-from rockdem.cli import app
-
-runner = CliRunner()
-
-
-def invoke(*args):
-    return runner.invoke(app, [str(a) for a in args])
-
-
-def sliding_wedge(folder: Path, **extra) -> Path:
-    doc = {
-        "units": "kN, m, kPa",
-        "materials": {"rock": {"unit_weight": 25}},
-        "joints": {
-            "j": {"normal_stiffness": 1.0e6, "friction_angle": 20},
-            "g": {"normal_stiffness": 1.0e6, "friction_angle": 45},
-        },
-        "ground_joint": "g",
-        "blocks": [
-            {"id": 0, "fixed": True, "vertices": [[-10, -2], [10, -2], [10, 0], [-10, 0]]},
-            {"id": 1, "material": "rock", "vertices": [[0, 0], [4, 0], [4, 1], [0, 3]]},
-            {"id": 2, "material": "rock", "vertices": [[0, 3], [4, 1], [4, 2], [0, 4]]},
-        ],
-        **extra,
-    }
-    path = folder / "wedge.yaml"
-    path.write_text(yaml.safe_dump(doc, sort_keys=False))
-    return path
+from test_hostile_round5 import invoke, sliding_wedge  # the same small models
 
 
 def test_stabilise_overwrite_keeps_a_users_file_named_like_a_picture(tmp_path):
