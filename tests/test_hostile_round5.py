@@ -517,3 +517,16 @@ def test_bolts_csv_says_which_bolts_are_in(tmp_path):
     text = (tmp_path / "o" / "bolts.csv").read_text().splitlines()
     rows = list(csv.DictReader(text))
     assert rows and all(row["installed"] == "false" for row in rows)
+
+
+def test_a_bolt_along_a_joint_is_refused(tmp_path):
+    """A bolt drilled along the joint between the two stacked blocks (head on
+    the face at that joint, pointing along it) was tied to whichever side
+    round-off put it on; it is refused.  One through the lower block into the
+    ground holds."""
+    bolt = {"head": [2, 1], "angle": 180, "length": 1.5, "capacity": 10, "axial_stiffness": 1e4}
+    r = invoke("check", two_blocks(tmp_path, bolts=[bolt]))
+    assert_refused(r, "bolts[0]", "runs along the joint between blocks", "turn it a little")
+    bolt.update(head=[2, 0.6], angle=210, length=3)  # through the lower block into the ground
+    r = invoke("check", two_blocks(tmp_path, bolts=[bolt]))
+    assert r.exit_code == 0, r.output

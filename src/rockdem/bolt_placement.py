@@ -101,6 +101,7 @@ def _crossed(bolt, where: str, blocks, faces, tree):
     qp = P0 - head
     denom = r[0] * s[:, 1] - r[1] * s[:, 0]
     ok = np.abs(denom) > 1e-12 * bolt.length * np.hypot(*s.T)
+    _check_not_along_a_joint(bolt, where, e, head, P0, P1, ~ok, tol, faces, blocks)
     with np.errstate(divide="ignore", invalid="ignore"):
         t = (qp[:, 0] * s[:, 1] - qp[:, 1] * s[:, 0]) / denom
         u = (qp[:, 0] * r[1] - qp[:, 1] * r[0]) / denom
@@ -129,6 +130,29 @@ def _crossed(bolt, where: str, blocks, faces, tree):
             "lengthen it or change its angle so that it ties the moving rock to stable rock",
         )
     return hit, t
+
+
+def _check_not_along_a_joint(bolt, where, e, head, P0, P1, parallel, tol, faces, blocks):
+    """InputError where the bolt runs along an interface (on its line, over
+    more than the tolerance): which side it is on is round-off's choice
+    (found by hostile testing, round 5)."""
+    k = np.flatnonzero(parallel)
+    if not k.size:
+        return
+    off = np.abs(e[0] * (P0[k, 1] - head[1]) - e[1] * (P0[k, 0] - head[0]))
+    a = (P0[k] - head) @ e
+    b = (P1[k] - head) @ e
+    lo, hi = np.maximum(np.minimum(a, b), 0.0), np.minimum(np.maximum(a, b), bolt.length)
+    along = k[(off <= tol) & (hi - lo > 10 * tol)]
+    if along.size:
+        i = int(along[0])
+        ids = blocks.ids
+        raise InputError(
+            where,
+            f"runs along the joint between blocks {int(ids[faces.block_a[i]])} and "
+            f"{int(ids[faces.block_b[i]])}, so it ties neither side to the other",
+            "turn it a little, or move its head off the joint's line",
+        )
 
 
 def _one_per_depth(hit, t, bolt, where, blocks, faces, tree, step):
