@@ -530,3 +530,11 @@ def test_a_bolt_along_a_joint_is_refused(tmp_path):
     bolt.update(head=[2, 0.6], angle=210, length=3)  # through the lower block into the ground
     r = invoke("check", two_blocks(tmp_path, bolts=[bolt]))
     assert r.exit_code == 0, r.output
+
+
+def test_a_confidence_just_below_one_is_not_printed_as_100_percent():
+    """confidence: 0.999999999 printed "100% interval"."""
+    from rockdem.studies.stats import level_text
+
+    assert level_text(0.95) == "95" and level_text(0.5) == "50"
+    assert level_text(0.999999999) == "99.9999999"

@@ -169,12 +169,14 @@ def study(
 
 
 def _print_summary(s: dict) -> None:
+    from ..studies.stats import level_text
+
     out.print(f"[bold]{escape(s['model_file'])}[/bold]: {_how(s)}")
     if s.get("pf") is not None:
         lo, hi = s["pf_interval"]
         out.print(
             f"probability of failure P(FS < 1): [bold]{s['pf']:.4g}[/bold] "
-            f"({s['failed']} of {s['ok']}; {100 * s['confidence']:g}% interval "
+            f"({s['failed']} of {s['ok']}; {level_text(s['confidence'])}% interval "
             f"{lo:.3g} to {hi:.3g})"
         )
     f = s.get("fs")

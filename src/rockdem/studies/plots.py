@@ -11,6 +11,8 @@ from pathlib import Path
 import numpy as np
 from matplotlib.figure import Figure
 
+from .stats import level_text
+
 BLUE, VERMILLION, ORANGE, GREEN = "#0072B2", "#D55E00", "#E69F00", "#009E73"
 
 
@@ -45,8 +47,8 @@ def fs_distribution(table, summary: dict) -> Figure:
     pf, ci = summary.get("pf"), summary.get("pf_interval")
     title = f"{len(fs)} samples"
     if pf is not None and ci is not None:
-        level = 100 * summary.get("confidence", 0.95)
-        title += f"; P(FS < 1) = {pf:.3g} ({level:g}% interval {ci[0]:.3g} to {ci[1]:.3g})"
+        level = level_text(summary.get("confidence", 0.95))
+        title += f"; P(FS < 1) = {pf:.3g} ({level}% interval {ci[0]:.3g} to {ci[1]:.3g})"
     fig.suptitle(title)
     return fig
 

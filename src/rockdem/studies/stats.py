@@ -25,6 +25,13 @@ def pf_interval(failed: int, n: int, confidence: float) -> tuple[float, float]:
     return (lo, hi)
 
 
+def level_text(confidence: float) -> str:
+    """A confidence level in percent, with the digits that keep it below 100
+    (0.999999999 printed "100% interval"; hostile round 5)."""
+    text = f"{100 * confidence:g}"
+    return f"{100 * confidence:.12g}" if text == "100" and confidence < 1 else text
+
+
 def _finite(x) -> float | None:
     x = float(x)
     return x if math.isfinite(x) else None
