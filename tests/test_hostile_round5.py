@@ -538,3 +538,11 @@ def test_a_confidence_just_below_one_is_not_printed_as_100_percent():
 
     assert level_text(0.95) == "95" and level_text(0.5) == "50"
     assert level_text(0.999999999) == "99.9999999"
+
+
+def test_a_sweep_range_that_starts_where_it_stops_is_refused(tmp_path):
+    """`{start: 0, stop: 0, steps: 3}` ran the same sample three times without
+    a word; the spec is refused at the key, with the fix."""
+    sweep = {"joints.plane.friction_angle": {"start": 30, "stop": 30, "steps": 3}}
+    r = invoke("check", two_blocks(tmp_path, study={"sweep": sweep}))
+    assert_refused(r, "study.sweep", "start and stop are both 30", "give a stop other than")

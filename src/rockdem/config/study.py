@@ -145,6 +145,12 @@ class SweepSpec(_Section):
             raise ValueError("give either `values`, or `start`, `stop` and `steps`, not both")
         if self.values is None and len(ranged) != 3:
             raise ValueError("give `values: [...]`, or `start`, `stop` and `steps`")
+        if self.values is None and self.start == self.stop:
+            # (hostile round 5: the same sample run `steps` times, unsaid)
+            raise ValueError(
+                f"start and stop are both {self.start:g}: every value would be the same; "
+                "give a stop other than the start, or `values: [...]`"
+            )
         values = [abs(v) for v in (*(self.values or ()), self.start, self.stop) if v]
         if values and max(values) > MAX_PARAMETER:
             raise ValueError(
