@@ -288,6 +288,15 @@ def print_summary(doc: dict[str, Any], units=None) -> None:
         footnotes.append(text)
         return f"note {len(footnotes)}"
 
+    def boundary_warning(what: str, row: dict) -> None:
+        """Where a trial's or design's mechanism reaches a fixed side of the model."""
+        if row.get("boundary"):
+            out.print(
+                f"[yellow]warning[/yellow]: {escape(what)} (FS {escape(row['fos_text'])}): "
+                f"{escape(row['boundary'])}",
+                soft_wrap=False,
+            )
+
     out.print(
         f"[bold]{escape(doc['model_name'])}[/bold]  ({escape(doc['model_file'])}): "
         f"target factor of safety {doc['target_fos']:g}"
@@ -315,12 +324,7 @@ def print_summary(doc: dict[str, Any], units=None) -> None:
             soft_wrap=False,
         )
         for r in doc["removal"]:
-            if r.get("boundary"):
-                out.print(
-                    f"[yellow]warning[/yellow]: trial {r['trial']} (FS {escape(r['fos_text'])}): "
-                    f"{escape(r['boundary'])}",
-                    soft_wrap=False,
-                )
+            boundary_warning(f"trial {r['trial']}", r)
     t = table("measures side by side", "measure", area, force, "FS", "target", "note")
     for r in doc["measures"]:
         texts.append(r["fos_text"])
@@ -366,12 +370,7 @@ def print_summary(doc: dict[str, Any], units=None) -> None:
             )
         print_with_notes(t)
         for r in doc["designs"]:
-            if r.get("boundary"):
-                out.print(
-                    f"[yellow]warning[/yellow]: design {escape(r['design'])} "
-                    f"(FS {escape(r['fos_text'])}): {escape(r['boundary'])}",
-                    soft_wrap=False,
-                )
+            boundary_warning(f"design {r['design']}", r)
     if doc.get("stages"):
         t = table("excavation stages", "stage", "name", "verdict", area, "joints failed")
         for r in doc["stages"]:

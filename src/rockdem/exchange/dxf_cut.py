@@ -94,9 +94,12 @@ def cut_section(section: Section, *, max_blocks: int | None = None) -> SectionBl
     free = free[topo.reading_order(shapely.get_coordinates(shapely.centroid(free)), 10 * tol)]
     fxy, foff = topo.to_arrays(free, tol)
     corners = np.diff(foff)
+
+    def centre(k: int) -> tuple[float, float]:  # of free block k, for an error
+        return tuple(shapely.get_coordinates(shapely.centroid(free[k]))[0] + origin)
+
     if (corners < 3).any():  # found by fuzzing: a 1e9 m wide section, blocks 10 m high
-        k = int(np.argmax(corners < 3))
-        x, y = shapely.get_coordinates(shapely.centroid(free[k]))[0] + origin
+        x, y = centre(int(np.argmax(corners < 3)))
         raise _fail(
             source,
             f"the block at ({x:.6g}, {y:.6g}) collapses: it is thinner than the drawing's "
@@ -107,7 +110,7 @@ def cut_section(section: Section, *, max_blocks: int | None = None) -> SectionBl
         # refused here, not by the model file read back after writing it (a
         # 200,000-vertex outline took 37 s of YAML before that said so)
         k = int(np.argmax(corners))
-        x, y = shapely.get_coordinates(shapely.centroid(free[k]))[0] + origin
+        x, y = centre(k)
         raise _fail(
             source,
             f"the block at ({x:.6g}, {y:.6g}) has {int(corners[k]):,} vertices, more than "
