@@ -11,7 +11,6 @@ import os
 import re
 import shutil
 import subprocess
-import tempfile
 from pathlib import Path
 
 import pytest
@@ -185,7 +184,7 @@ window.addEventListener('load', () => {
 </script>"""
 
 
-def _selenium_driver():
+def _selenium_driver(profile: Path):
     try:
         from selenium import webdriver
         from selenium.webdriver.chrome.service import Service
@@ -205,7 +204,7 @@ def _selenium_driver():
         "--disable-component-update",
         "--disable-sync",
         "--window-size=1200,900",
-        f"--user-data-dir={tempfile.mkdtemp(prefix='rockdem-chrome-')}",
+        f"--user-data-dir={profile}",
     ):
         opts.add_argument(arg)
     opts.set_capability("goog:loggingPrefs", {"browser": "ALL"})
@@ -239,10 +238,12 @@ def _check_with_selenium(driver, report: Path, shot: Path, fos_text: str) -> Non
 
 
 def _check_with_cli(report: Path, shot: Path, fos_text: str) -> None:
-    """Fallback without selenium: the report's copy with a probe script, DOM dumped."""
+    """Fallback without selenium: the report's copy with a probe script, DOM dumped
+    (the copy and the browser's profile beside the screenshot, in the test's
+    own tmp_path: nothing is left in /tmp)."""
     import json
 
-    probe = report.with_name("probe.html")
+    probe = shot.with_name("probe.html")
     probe.write_text(
         report.read_text(encoding="utf-8").replace("<head>", "<head>" + _PROBE, 1),
         encoding="utf-8",
@@ -257,7 +258,7 @@ def _check_with_cli(report: Path, shot: Path, fos_text: str) -> None:
         "--disable-background-networking",
         "--disable-component-update",
         "--disable-sync",
-        f"--user-data-dir={tempfile.mkdtemp(prefix='rockdem-chrome-')}",
+        f"--user-data-dir={shot.parent / 'chrome-profile'}",
         "--virtual-time-budget=10000",
     ]
     dom = subprocess.run(
@@ -290,7 +291,7 @@ def test_report_in_headless_browser(report, results, tmp_path):
     _, fos = results
     shot = tmp_path / "report-screenshot.png"
     fos_text = f"Factor of safety F = {fos.value:.4f}"
-    driver = _selenium_driver()
+    driver = _selenium_driver(tmp_path / "chrome-profile")
     if driver is not None:
         _check_with_selenium(driver, report, shot, fos_text)
     else:
