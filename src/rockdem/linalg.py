@@ -51,10 +51,30 @@ _PYPARDISO: object = False  # not looked for yet; None when not installed
 os.environ.setdefault("MKL_CBWR", "AUTO")
 
 
+def _mkl_runtime() -> str | None:
+    """The path of MKL's ``mkl_rt`` from the installed ``mkl`` package's file
+    list, or None.  pypardiso otherwise walks the whole environment for it
+    (0.3 s per process, at its import)."""
+    import importlib.metadata as metadata
+
+    try:
+        files = metadata.files("mkl") or []
+    except metadata.PackageNotFoundError:
+        return None
+    found = sorted((f for f in files if "mkl_rt" in f.name), key=lambda f: len(str(f)))
+    for f in found:
+        path = f.locate()
+        if os.path.isfile(path):
+            return os.path.realpath(path)
+    return None
+
+
 def _pardiso_module():
     """pypardiso, imported on first use (0.2 s: not at ``rockdem --version``)."""
     global _PYPARDISO
     if _PYPARDISO is False:
+        if "PYPARDISO_MKL_RT" not in os.environ and (mkl_rt := _mkl_runtime()):
+            os.environ["PYPARDISO_MKL_RT"] = mkl_rt
         try:  # optional accelerator
             import pypardiso
         except ImportError:  # pragma: no cover - depends on the installation
