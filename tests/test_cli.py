@@ -57,6 +57,30 @@ def test_check_json(box):
     assert data["loads"]["resultant"] == pytest.approx([0, -100])
 
 
+def test_json_errors_are_a_json_object_on_stdout_too(box, monkeypatch):
+    """With --json a refused model and a failed computation print, besides the
+    one line on stderr, one JSON object on stdout with the same text and the
+    exit code (an empty stdout failed a script's json.loads)."""
+    box.write_text(BOX.replace("unit_weight: 25", "unit_weight: -3"))
+    for command in ("check", "run", "fos"):
+        r = invoke(command, box, "--json")
+        assert r.exit_code == 2
+        data = json.loads(r.stdout)
+        assert data["exit_code"] == 2 and "unit_weight" in data["error"]
+        assert r.stderr.strip() == f"error: {data['error']}"
+    assert invoke("check", box).stdout == ""  # without --json: stderr only
+
+    import rockdem.analysis
+
+    def boom(*args, **kwargs):
+        raise FloatingPointError("singular matrix")
+
+    box.write_text(BOX)
+    monkeypatch.setattr(rockdem.analysis, "analyse", boom)
+    data = json.loads(invoke("run", box, "--json").stdout)
+    assert data["exit_code"] == EXIT_FAILED and "singular matrix" in data["error"]
+
+
 def test_check_example():
     r = invoke("check", "--example", "wedge-verification")
     assert r.exit_code == 0, r.output
@@ -393,7 +417,8 @@ def test_broken_model(path: Path):
 def test_broken_model_run_and_fos(command):
     path = BROKEN / "friction-out-of-range.yaml"
     r = invoke(command, path, "--json")
-    assert r.exit_code == EXIT_INPUT and r.stdout == ""
+    assert r.exit_code == EXIT_INPUT
+    assert json.loads(r.stdout)["exit_code"] == EXIT_INPUT  # the error, for scripts
     assert "joints.bedding.friction_angle" in r.stderr
 
 

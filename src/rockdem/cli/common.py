@@ -157,7 +157,9 @@ def _root(
     ] = MAX_BLOCKS,
 ) -> None:
     """Stability of jointed rock slopes by the discrete element method."""
+    global _JSON_PRINTED
     _ROOT["max_blocks"] = max_blocks
+    _JSON_PRINTED = False
     _show_warnings()
     _check_solver_choice()
 
@@ -181,6 +183,8 @@ def _check_solver_choice() -> None:
 #: "do not hold" the verdict on stderr while the JSON read "stable", no
 #: warnings)
 ISSUED: list[str] = []
+#: the command printed its JSON object (an error after it adds no second one)
+_JSON_PRINTED = False
 
 
 def with_issued_warnings(doc: dict[str, Any]) -> dict[str, Any]:
@@ -233,7 +237,7 @@ def _guard(debug: bool) -> Iterator[None]:
         if debug:
             raise
         text = str(exc) if isinstance(exc, InputError) else str(exc).splitlines()[0]
-        err.print(f"error: {escape(_one_line(text))}")
+        _error(_one_line(text), EXIT_INPUT)
         raise typer.Exit(EXIT_INPUT) from None
     except KeyboardInterrupt:
         err.print("interrupted")
@@ -241,8 +245,18 @@ def _guard(debug: bool) -> Iterator[None]:
     except Exception as exc:
         if debug:
             raise
-        err.print(f"error: {escape(_one_line(_failure_text(exc)))}")
+        _error(_one_line(_failure_text(exc)), EXIT_FAILED)
         raise typer.Exit(EXIT_FAILED) from None
+
+
+def _error(text: str, code: int) -> None:
+    """The one line on stderr; with ``--json`` also the JSON object scripts
+    read from stdout, unless the command printed its own already (an empty
+    stdout failed ``json.loads`` before the exit code was looked at)."""
+    err.print(f"error: {escape(text)}")
+    ctx = _current_context()
+    if ctx is not None and ctx.params.get("json_") and not _JSON_PRINTED:
+        typer.echo(json.dumps({"rockdem_version": __version__, "error": text, "exit_code": code}))
 
 
 def _one_line(text: str) -> str:
@@ -364,7 +378,9 @@ def _progress(quiet: bool, label: str) -> Iterator[Progress]:
 def _echo_json(data: dict[str, Any]) -> None:
     from ..result_tables import jsonable
 
+    global _JSON_PRINTED
     typer.echo(json.dumps(jsonable(data), indent=1, allow_nan=False))
+    _JSON_PRINTED = True
 
 
 def _header(path: Path, model, cfg) -> dict[str, Any]:
