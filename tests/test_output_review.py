@@ -427,3 +427,50 @@ def test_the_stress_plot_of_a_standing_slope_is_not_the_open_crack(water_model):
     chosen = select_interfaces(a)
     stress = a.interfaces.normal_stress[chosen]
     assert (stress > 1.0).any()  # the plane carries the block (63.8 kPa mean)
+
+
+#: two wedges on a bilinear surface with a cohesive joint between them rising
+#: into the slope (literature round 5): under gravity an end of that joint
+#: opens and its point loses its cohesion, so the factor depends on the number
+#: of spring points (1.605 / 1.595 / 1.581 with 2 / 3 / 5 points)
+TWO_WEDGES = """\
+name: two wedges, cohesive joint between
+materials:
+  rock: {unit_weight: 26}
+joints:
+  between: {normal_stiffness: 1.0e+6, friction_angle: 25, cohesion: 30, residual_cohesion: 30}
+  upper: {normal_stiffness: 1.0e+6, friction_angle: 30, cohesion: 10, residual_cohesion: 10}
+  lower: {normal_stiffness: 1.0e+6, friction_angle: 35, cohesion: 5, residual_cohesion: 5}
+joint_lines:
+  - {joint: upper, start: [-8.39099631, 10], end: [0, 0]}
+  - {joint: lower, start: [0, 0], end: [10.9899097, -4]}
+analysis: {load_steps: 1}
+blocks:
+  - {id: 0, fixed: true, vertices: [[-40, 10], [-8.39099631, 10], [0, 0], [10.9899097, -4],
+     [40, -4], [40, -30], [-40, -30]]}
+  - {id: 1, material: rock, vertices: [[-8.39099631, 10], [0, 0], [-3.63970234, 10]]}
+  - {id: 2, material: rock, vertices: [[0, 0], [10.9899097, -4], [5.8943264, 10],
+     [-3.63970234, 10]]}
+"""
+
+
+@pytest.mark.parametrize("command", ["run", "fos"])
+def test_a_bond_lost_at_a_spring_point_is_a_warning_on_the_terminal(tmp_path, command):
+    """The sentence that the result depends on the number of spring points
+    (a point of a cohesive joint failed in tension) was only in the JSON's
+    trust list and the report; `rockdem fos` printed 1.5957 without it."""
+    import json
+
+    from typer.testing import CliRunner
+
+    from rockdem.cli import app
+
+    path = tmp_path / "wedges.yaml"
+    path.write_text(TWO_WEDGES)
+    runner = CliRunner()
+    r = runner.invoke(app, [command, str(path)])
+    assert r.exit_code == 0, r.output
+    lines = [ln for ln in r.stdout.splitlines() if ln.startswith("warning:")]
+    assert any("failed in tension" in ln and "number of spring points" in ln for ln in lines)
+    data = json.loads(runner.invoke(app, [command, str(path), "--json"]).stdout)
+    assert any("failed in tension" in w for w in data["warnings"]), data["warnings"]
