@@ -388,10 +388,12 @@ class BoundaryContact:
                 "front": "further beyond the toe",
             }.get(self.side, f"beyond its {self.side} side")
         ids = ", ".join(str(i) for i in self.blocks[:8]) + (", ..." if len(self.blocks) > 8 else "")
+        # (conditional: a fixed block drawn along a side may be a real support,
+        # the footing of an arch, not a cut; found by literature round 5)
         return (
             f"the mechanism reaches the fixed {self.side} boundary at {where}, blocks {ids}: "
-            f"extend the model {fix} and analyse again (the mechanism is bounded by where "
-            "the model was cut, not by the rock)"
+            f"if the model was cut there, extend it {fix} and analyse again (the mechanism "
+            "is then bounded by where the model was cut, not by the rock)"
         )
 
 
