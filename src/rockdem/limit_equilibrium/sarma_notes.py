@@ -63,7 +63,8 @@ def differences(result, failed, group, joints) -> list[str]:
             out.append(
                 "the LE assumes the whole of each sliding face in contact; in the DEM part of "
                 f"interface(s) {where} is open and carries no cohesion or friction there "
-                "(the loads' moment lifts it), so its factor can be lower"
+                "(opened on the way to the limit: the blocks' rotation lifted it, and an opened "
+                "point keeps no bond), so its factor can be lower"
             )
     brittle = sorted(
         {
