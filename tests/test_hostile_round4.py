@@ -250,6 +250,17 @@ def test_a_dxf_drawing_given_as_the_model_says_how_to_import_it(tmp_path, comman
     assert_refused(r, "--template", "is a DXF drawing, not a model file")
 
 
+@pytest.mark.parametrize("command", ["check", "fos"])
+def test_a_python_model_script_given_as_the_model_says_to_run_it(tmp_path, command):
+    """A Python script read as YAML: 'the top level is a string, not a mapping
+    of keys' (found by literature round 5, whose models were scripts)."""
+    script = tmp_path / "slope.py"
+    script.write_text("import rockdem as rd\nmodel = rd.Model\n")
+    assert_refused(
+        invoke(command, script), "slope.py: is a Python script, not a model file", "python slope.py"
+    )
+
+
 def test_a_dxf_drawing_given_as_a_study_spec_says_it_is_a_drawing(tmp_path):
     """`--spec section.dxf` said 'the top level is a string' (the hostile
     round's leftover)."""

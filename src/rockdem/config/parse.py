@@ -65,6 +65,14 @@ def read_document(path: str | Path) -> tuple[dict, Any]:
             f"make a model of it with `rockdem import {path.name} --out model.yaml`, or name "
             f"it in a model file (`geometry: {{dxf: {path.name}}}`)",
         )
+    if path.suffix.lower() in (".py", ".pyw", ".ipynb"):  # it parsed as YAML: "a string"
+        raise ModelFileError(
+            source,
+            "",
+            "is a Python script, not a model file",
+            f"run it with `python {path.name}` (a model built in Python is analysed there: "
+            "rockdem.analyse, rockdem.factor_of_safety), or give a .yaml, .json or .toml file",
+        )
     raw = read_bounded(path, source)
     try:
         text = raw.decode("utf-8-sig")
