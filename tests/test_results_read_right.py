@@ -396,7 +396,8 @@ def test_mechanism_at_the_fixed_back_and_base_of_the_model_is_named():
     assert np.isclose(found["back"].at, -8.0) and np.isclose(found["base"].at, 0.0)
     assert found["back"].blocks == (2,)
     text = found["back"].message
-    assert "reaches the fixed back boundary at x = -8" in text and "if the model was cut there, extend it" in text
+    assert "reaches the fixed back boundary at x = -8" in text
+    assert "if the model was cut there, extend it" in text
     assert "y = 0" in found["base"].message
 
 
