@@ -9,7 +9,8 @@ A case file is a small YAML (or TOML) file whose one section
     limit_equilibrium:
       plane_failure:
         {height: 30, face_angle: 60, plane_dip: 30, friction_angle: 30,
-         cohesion: 48, unit_weight: 25.5, crack_distance: 9, water_depth: 14.8}
+         cohesion: 48, unit_weight: 25.5, crack_distance: 9, water_depth: 14.8,
+         water_unit_weight: 9.81}
 
 ``plane_failure`` takes the arguments of :func:`plane_failure`;
 ``wedge`` those of :func:`two_block_wedge`; ``toppling`` those of
@@ -30,6 +31,7 @@ import numpy as np
 
 from ..config.errors import ModelFileError, _line
 from ..errors import InputError
+from ..units import water_unit_weight
 from .closed_forms import (
     plane_failure,
     stepped_heights,
@@ -145,15 +147,15 @@ def _run_case(data: dict, source: str) -> dict[str, Any]:
                     f"{v:g} is beyond {MAX_INPUT:g}, the largest value of any quantity of a model",
                     "check the units, or give a smaller value",
                 )
+    if case == "plane_failure":
+        _water_weighed(inputs, data.get("units"), source, where)
     try:
         if case == "plane_failure":
             r = plane_failure(**inputs)
             result = r.as_dict()
             # JSON has no infinity: an unbounded factor is null, said in words
             result["fos_note"] = (
-                "unbounded: nothing drives the block down the plane"
-                if math.isinf(r.fos)
-                else ""
+                "unbounded: nothing drives the block down the plane" if math.isinf(r.fos) else ""
             )
         elif case == "wedge":
             r = two_block_wedge(**inputs)
@@ -176,6 +178,25 @@ def _run_case(data: dict, source: str) -> dict[str, Any]:
         key = exc.where.replace(f"{'wedge' if case == 'wedge' else case} ", f"{where}.", 1)
         raise _fail(source, key, exc.problem, exc.fix) from None
     return {"case": case, "inputs": inputs, "result": result}
+
+
+def _water_weighed(inputs: dict, units: Any, source: str, where: str) -> None:
+    """Water in the crack needs its unit weight in the case's units, as a
+    model file's water table does (found by hostile testing: a case in t and m
+    weighed its water at the function's default 9.81, kN/m^3, and read a
+    factor of safety of -0.75)."""
+    depth = inputs.get("water_depth", 0.0)
+    if "water_unit_weight" in inputs or not isinstance(depth, int | float) or not depth > 0:
+        return
+    gamma_w = water_unit_weight(units if isinstance(units, str) else None)
+    raise _fail(
+        source,
+        f"{where}.water_unit_weight",
+        "is missing: water in the crack (water_depth) needs it",
+        f"give water_unit_weight: {gamma_w:.3g} (water in {units})"
+        if gamma_w is not None
+        else "give the unit weight of water in the case's units (9.81 kN/m^3, 1 t/m^3)",
+    )
 
 
 def _toppling_case(inputs: dict, source: str, where: str) -> dict[str, Any]:

@@ -1,0 +1,100 @@
+"""Hostile testing, round 6: limit-equilibrium case files, `rockdem import`
+destinations, stabilisation bolt patterns, study folders read back.  Each
+test failed before its fix."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import yaml
+from typer.testing import CliRunner
+
+from _cli import assert_refused
+from rockdem.cli import app
+
+runner = CliRunner()
+
+
+def invoke(*args):
+    return runner.invoke(app, [str(a) for a in args])
+
+
+def two_blocks(folder: Path, **extra) -> Path:
+    """Two 2 x 1 blocks stacked on a horizontal fixed plane, with ``extra``
+    top-level keys."""
+    doc = {
+        "units": "kN, m, kPa",
+        "materials": {"rock": {"unit_weight": 25}},
+        "joints": {"plane": {"normal_stiffness": 1.0e6, "friction_angle": 33}},
+        "blocks": [
+            {"fixed": True, "vertices": [[-8, -1], [8, -1], [8, 0], [-8, 0]]},
+            {"material": "rock", "vertices": [[0, 0], [2, 0], [2, 1], [0, 1]]},
+            {"material": "rock", "vertices": [[0, 1], [2, 1], [2, 2], [0, 2]]},
+        ],
+        **extra,
+    }
+    path = folder / "two.yaml"
+    path.write_text(yaml.safe_dump(doc, sort_keys=False))
+    return path
+
+
+def sliding_wedge(folder: Path, **extra) -> Path:
+    """A block on a plane dipping 26.6 degrees with friction 20 (FS 0.73)
+    above a block on the ground, with ``extra`` top-level keys."""
+    doc = {
+        "units": "kN, m, kPa",
+        "materials": {"rock": {"unit_weight": 25}},
+        "joints": {
+            "j": {"normal_stiffness": 1.0e6, "friction_angle": 20},
+            "g": {"normal_stiffness": 1.0e6, "friction_angle": 45},
+        },
+        "ground_joint": "g",
+        "blocks": [
+            {"id": 0, "fixed": True, "vertices": [[-10, -2], [10, -2], [10, 0], [-10, 0]]},
+            {"id": 1, "material": "rock", "vertices": [[0, 0], [4, 0], [4, 1], [0, 3]]},
+            {"id": 2, "material": "rock", "vertices": [[0, 3], [4, 1], [4, 2], [0, 4]]},
+        ],
+        **extra,
+    }
+    path = folder / "wedge.yaml"
+    path.write_text(yaml.safe_dump(doc, sort_keys=False))
+    return path
+
+
+# ------------------------------------------------------ limit-equilibrium case files
+PLANE = (
+    "height: 30, face_angle: 60, plane_dip: 30, friction_angle: 30, cohesion: 48, "
+    "unit_weight: 25.5, crack_distance: 9"
+)
+
+
+def le_case(folder: Path, inputs: str, units: str = "kN, m, kPa") -> Path:
+    path = folder / "case.yaml"
+    path.write_text(f"units: {units}\nlimit_equilibrium:\n  plane_failure: {{{inputs}}}\n")
+    return path
+
+
+def test_water_in_a_case_file_of_tonnes_is_not_weighed_in_kilonewtons(tmp_path):
+    """A crack full of water in a case file in t and m, without
+    water_unit_weight, was weighed at 9.81 (kN/m^3) against rock of 2.55
+    t/m^3: 'factor of safety: -0.7406', exit 0.  The water's unit weight is
+    required with water, as a model file's water table requires it."""
+    inputs = PLANE.replace("cohesion: 48", f"cohesion: {48 / 9.81!r}")
+    inputs = inputs.replace("unit_weight: 25.5", f"unit_weight: {25.5 / 9.81!r}")
+    case = le_case(tmp_path, f"{inputs}, water_depth: 14.8", units="t, m, t/m^2")
+    assert_refused(
+        invoke("le", case),
+        "case.yaml:3: limit_equilibrium.plane_failure.water_unit_weight: ",
+        "is missing",
+        "give water_unit_weight: 1 (water in t, m, t/m^2)",
+    )
+    # given, it is the kN answer (0.7945) in tonnes
+    case = le_case(
+        tmp_path, f"{inputs}, water_depth: 14.8, water_unit_weight: 1.0", units="t, m, t/m^2"
+    )
+    r = invoke("le", case)
+    assert r.exit_code == 0, r.output
+    assert "factor of safety: 0.794" in r.stdout
+    # no water, no unit weight of water needed
+    r = invoke("le", le_case(tmp_path, PLANE))
+    assert r.exit_code == 0, r.output
