@@ -4,6 +4,7 @@ test failed before its fix."""
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import yaml
@@ -98,3 +99,22 @@ def test_water_in_a_case_file_of_tonnes_is_not_weighed_in_kilonewtons(tmp_path):
     # no water, no unit weight of water needed
     r = invoke("le", le_case(tmp_path, PLANE))
     assert r.exit_code == 0, r.output
+
+
+def test_water_that_lifts_the_block_off_its_plane_gives_no_negative_factor(tmp_path):
+    """A crack 29 m deep in a 30 m slope, full of water: the uplift and the
+    crack's thrust exceed the block's weight across the plane, and Hoek &
+    Bray's formula read 'factor of safety: -0.3441' (exit 0)."""
+    inputs = PLANE.replace("crack_distance: 9", "crack_depth: 29")
+    case = le_case(tmp_path, f"{inputs}, water_depth: 29, water_unit_weight: 9.81")
+    assert_refused(
+        invoke("le", case),
+        "limit_equilibrium.plane_failure.water_depth: ",
+        "lifts the block off the plane",
+        "rockdem fos",
+    )
+    # water short of that still has its factor
+    case = le_case(tmp_path, f"{inputs}, water_depth: 2, water_unit_weight: 9.81")
+    r = invoke("le", case, "--json")
+    assert r.exit_code == 0, r.output
+    assert json.loads(r.stdout)["result"]["fos"] > 0
