@@ -7,6 +7,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+import pytest
 import yaml
 from typer.testing import CliRunner
 
@@ -118,3 +119,17 @@ def test_water_that_lifts_the_block_off_its_plane_gives_no_negative_factor(tmp_p
     r = invoke("le", case, "--json")
     assert r.exit_code == 0, r.output
     assert json.loads(r.stdout)["result"]["fos"] > 0
+
+
+# ------------------------------------------------------------------- rockdem import
+@pytest.mark.parametrize("name", ["model.toml", "model.json", "other.dxf", "model.txt"])
+def test_import_writes_only_a_yaml_file(tmp_path, name):
+    """`rockdem import --out model.toml` wrote YAML under a TOML name (the file
+    it said loads with every command then read 'not valid TOML'), and
+    `--out other.dxf --overwrite` replaced a drawing with YAML text."""
+    out = tmp_path / name
+    if name.endswith(".dxf"):
+        out.write_text("0\nEOF\n")
+    r = invoke("import", "--example", "--bolt-force", 150, "--out", out, "--overwrite")
+    assert_refused(r, f"--out {out}", "give a .yaml file name")
+    assert not out.exists() or out.read_text() == "0\nEOF\n"

@@ -81,7 +81,10 @@ def import_dxf(
     out_file: Annotated[
         Path | None,
         typer.Option(
-            "--out", "-o", help="Write the model file here (default: print it).", metavar="FILE"
+            "--out",
+            "-o",
+            help="Write the model file (.yaml) here (default: print it).",
+            metavar="FILE",
         ),
     ] = None,
     example: Annotated[
@@ -185,6 +188,14 @@ def import_dxf(
             if out_file.exists() and out_file.resolve() == Path(path).resolve():
                 raise InputError(
                     f"--out {out_file}", "is the DXF drawing itself", "give a .yaml file name"
+                )
+            if out_file.suffix.lower() not in (".yaml", ".yml"):
+                # (found by hostile testing: --out model.toml wrote YAML that
+                # then read "not valid TOML"; --out other.dxf replaced a drawing)
+                raise InputError(
+                    f"--out {out_file}",
+                    "is not a .yaml name, and import writes a YAML model file",
+                    "give a .yaml file name",
                 )
             inputs = [path] + ([template] if template is not None else [])
             _check_out_file(out_file, inputs=inputs)
