@@ -133,3 +133,18 @@ def test_import_writes_only_a_yaml_file(tmp_path, name):
     r = invoke("import", "--example", "--bolt-force", 150, "--out", out, "--overwrite")
     assert_refused(r, f"--out {out}", "give a .yaml file name")
     assert not out.exists() or out.read_text() == "0\nEOF\n"
+
+
+# ------------------------------------------------------------- stabilise: bolt rows
+def test_a_bolt_pattern_of_given_rows_is_not_said_to_have_tried_16(tmp_path):
+    """With `stabilisation.bolts.row_spacing` the rows are the ones that
+    spacing lays out (one row here), but a pattern that fell short was said
+    'not reached with up to 16 rows of bolts'."""
+    bolts = {"capacity": 0.01, "axial_stiffness": 1.0e4, "row_spacing": 1.0e6}
+    model = sliding_wedge(tmp_path, stabilisation={"bolts": bolts})
+    r = invoke("stabilise", model, "--quiet", "--no-support", "--json")
+    assert r.exit_code == 0, r.output
+    (row,) = [m for m in json.loads(r.stdout)["measures"] if m["kind"] == "bolts"]
+    assert not row["reaches_target"]
+    assert "16 rows" not in row["note"], row["note"]
+    assert "rows of bolts 1e+06 apart on the face" in row["note"], row["note"]

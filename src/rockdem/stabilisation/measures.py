@@ -329,8 +329,15 @@ def _bolt_row(model, target_fos, bolting: dict, width: float, force_unit: str) -
             return Measure("bolts", label, 0.0, None, None, False, str(exc), None)
     cap = f"{bolting['capacity']:.3g}{force_unit}"
     if p.spacing is None:
+        # (found by hostile testing: with row_spacing given, which lays out its
+        # own rows, this still read "up to 16 rows")
+        rows = (
+            "up to 16 rows of bolts"
+            if bolting.get("row_spacing") is None
+            else f"rows of bolts {bolting['row_spacing']:.3g} apart on the face"
+        )
         note = (
-            f"not reached with up to 16 rows of bolts ({cap} capacity) 0.25 apart along "
+            f"not reached with {rows} ({cap} capacity) 0.25 apart along "
             "the slope (longer or stronger bolts, or another measure)"
         )
         return Measure("bolts", label, 0.0, None, None, False, note, None)
