@@ -148,3 +148,21 @@ def test_a_bolt_pattern_of_given_rows_is_not_said_to_have_tried_16(tmp_path):
     assert not row["reaches_target"]
     assert "16 rows" not in row["note"], row["note"]
     assert "rows of bolts 1e+06 apart on the face" in row["note"], row["note"]
+
+
+# ----------------------------------------------------------------- study folders
+def test_a_study_folder_whose_study_json_is_no_object_is_refused(tmp_path):
+    """A study.json holding `[]` (valid JSON, not the study's record) ended
+    in "AttributeError: 'list' object has no attribute 'get'", exit 1."""
+    pytest.importorskip("pyarrow")  # rockdem[study]
+    study = {
+        "samples": 2,
+        "inputs": {"joints.plane.friction_angle": {"distribution": "normal", "mean": 33, "sd": 1}},
+    }
+    model = two_blocks(tmp_path, study=study)
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "study.json").write_text("[]\n")
+    r = invoke("study", model, "--out", out, "--workers", 0, "--quiet")
+    assert_refused(r, f"--out {out}", "holds the results of another study", "--overwrite")
+    assert (out / "study.json").read_text() == "[]\n"

@@ -190,6 +190,8 @@ class Store:
                 old = json.loads(info.read_text(encoding="utf-8"))
             except (OSError, ValueError):
                 old = {}
+            if not isinstance(old, dict):  # (hostile testing: `[]` was an AttributeError)
+                old = {}
             if old.get("fingerprint") != manifest["fingerprint"]:
                 raise InputError(
                     f"--out {folder}",
