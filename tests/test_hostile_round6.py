@@ -166,3 +166,15 @@ def test_a_study_folder_whose_study_json_is_no_object_is_refused(tmp_path):
     r = invoke("study", model, "--out", out, "--workers", 0, "--quiet")
     assert_refused(r, f"--out {out}", "holds the results of another study", "--overwrite")
     assert (out / "study.json").read_text() == "[]\n"
+
+
+# ------------------------------------------------------------------ the units note
+@pytest.mark.parametrize("units", ["kN, m,\\e[31m kPa", "kN,\\nm, kPa", "kN,\\tm, kPa"])
+def test_a_units_note_with_a_control_character_is_refused(tmp_path, units):
+    """Names and keys with an escape or a line break were refused (round 3),
+    but the `units` note, printed in the header of every command, was not:
+    its escape coloured the terminal and a line break split the header."""
+    path = two_blocks(tmp_path)
+    path.write_text(path.read_text().replace("units: kN, m, kPa", f'units: "{units}"', 1))
+    line = assert_refused(invoke("check", path), "two.yaml: units: the note", "control character")
+    assert "\x1b" not in line

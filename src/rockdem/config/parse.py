@@ -137,10 +137,21 @@ def _too_large(source: str, limit: int) -> ModelFileError:
 
 
 def _check_keys(data: dict, source: str) -> None:
-    """Refuse control characters in every key and in every ``name`` (the
+    """Refuse control characters in every key, in the ``units`` note and in
+    every ``name`` (the
     model's, a bolt's, a support's, a load's: printed in tables and reports;
     fuzzing: a bolt named "B1\\nFAKE LINE\\x1b[31m" wrote a line of its own and
     coloured the terminal)."""
+    units = data.get("units") if isinstance(data, dict) else None
+    if isinstance(units, str) and _CONTROL.search(units):
+        # (hostile testing: an escape in the note coloured the terminal in
+        # every command's header; a line break split it)
+        raise ModelFileError(
+            source,
+            "units",
+            f"the note {units!r} holds a control character (a line break, tab or escape)",
+            "write the units on one line, for example 'kN, m, kPa'",
+        )
     todo: list[tuple[Any, str]] = [(data, "")]
     while todo:
         item, path = todo.pop()
