@@ -178,3 +178,21 @@ def test_a_units_note_with_a_control_character_is_refused(tmp_path, units):
     path.write_text(path.read_text().replace("units: kN, m, kPa", f'units: "{units}"', 1))
     line = assert_refused(invoke("check", path), "two.yaml: units: the note", "control character")
     assert "\x1b" not in line
+
+
+def test_a_study_of_a_joint_whose_name_holds_a_dot_says_why_it_is_not_found(tmp_path):
+    """A joint named `a.b` studied as `joints.a.b.friction_angle` read
+    "`joints` has no key `a`", though the file has the joint: the message
+    now says that the name holds a separator and to rename it."""
+    study = {
+        "samples": 2,
+        "inputs": {"joints.a.b.friction_angle": {"distribution": "normal", "mean": 33, "sd": 1}},
+    }
+    path = two_blocks(tmp_path, study=study)
+    path.write_text(path.read_text().replace("  plane:", "  a.b:", 1))
+    assert_refused(
+        invoke("study", path, "--out", tmp_path / "out", "--workers", 0),
+        "study.inputs.joints.a.b.friction_angle",
+        "the key `a.b` holds a `.` or `[`",
+        "rename it to vary it",
+    )

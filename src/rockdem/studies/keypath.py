@@ -141,6 +141,14 @@ def resolve(doc: dict, path: str) -> list[Loc]:
         close = difflib.get_close_matches(str(part), [str(k) for k in known], n=1, cutoff=0.6)
         where = f"`{_keypath(loc)}`" if loc else "the file"
         hint = f" (did you mean `{close[0]}`?)" if close else ""
+        # (found by hostile testing: a joint named `a.b` read "`joints` has no
+        # key `a`", though the file has it: a path cannot name it)
+        split = [str(k) for k in node if re.match(rf"{re.escape(str(part))}\s*[.\[]", str(k))]
+        if split:
+            hint = (
+                f" (the key `{split[0]}` holds a `.` or `[`, which a key path reads as a "
+                "separator: rename it to vary it)"
+            )
         raise ValueError(f"{where} has no key `{part}`{hint}")
 
     walk(doc, parts, ())
