@@ -196,3 +196,27 @@ def test_a_study_of_a_joint_whose_name_holds_a_dot_says_why_it_is_not_found(tmp_
         "the key `a.b` holds a `.` or `[`",
         "rename it to vary it",
     )
+
+
+# ------------------------------------------------------------------ removal regions
+SLOPE = {
+    "units": "kN, m, kPa",
+    "materials": {"rock": {"unit_weight": 25}},
+    "joints": {"bedding": {"normal_stiffness": 1.0e6, "friction_angle": 35, "cohesion": 10}},
+    "slope": {
+        "profile": {"height": 10, "face_angle": 60},
+        "depth": 6,
+        "joint_sets": {"bedding": {"dip": 30, "spacing": 2.5}},
+    },
+}
+
+
+def test_a_crossed_removal_region_of_a_generated_slope_is_named_at_its_key(tmp_path):
+    """A self-crossing `remove.regions[1]` of a generated slope was reported
+    at `slope:` as "excavation region is not a valid polygon" (which one, and
+    where?); it is named at its key and line, as on explicit blocks."""
+    regions = [[[-5, 5], [0, 5], [0, 8]], [[0, 0], [1, 1], [1, 0], [0, 1]]]
+    path = tmp_path / "slope.yaml"
+    path.write_text(yaml.safe_dump({**SLOPE, "remove": {"regions": regions}}, sort_keys=False))
+    line = assert_refused(invoke("check", path), "remove.regions[1]: is not a valid polygon")
+    assert "slope.yaml:" in line and ": slope:" not in line

@@ -453,8 +453,8 @@ def _slope_model(cfg: ModelFile, joints, loads, settings, name: str, max_blocks:
     geom = geometry.generate_slope(_profile(s.profile), sets, **kw)
     if cfg.remove.blocks:
         geom = geometry.remove_blocks(geom, list(cfg.remove.blocks))
-    for region in cfg.remove.regions:
-        geom = geometry.excavate(geom, [tuple(p) for p in region])
+    for k, region in enumerate(cfg.remove.regions):  # (hostile testing: named `slope`)
+        geom = geometry.excavate(geom, [tuple(p) for p in region], where=f"remove.regions {k}")
     if cfg.remove.profile is not None:
         try:
             geom = geometry.cut_to_profile(geom, [tuple(p) for p in cfg.remove.profile])
