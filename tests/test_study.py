@@ -849,3 +849,33 @@ def test_an_empty_spec_file_asks_for_a_study_not_a_model(tmp_path):
     r = invoke("study", model, "--spec", spec, "--out", tmp_path / "out", "--workers", "0")
     said = assert_refused(r, "spec.yaml", "the file is empty", "write a `study:` section")
     assert "example list" not in said
+
+
+def test_each_sample_keeps_what_its_analysis_warned_of(tmp_path):
+    """A sample's warnings were lost (every sample could, say, carry water
+    nowhere or reach the model's cut without a word in samples.csv or the
+    summary): they are the row's ``warnings``, counted in the summary and
+    printed once with their count, not once per sample."""
+    doc = plane_document()
+    doc["loads"] = {"water_table": [[-20, -100], [20, -100]], "water_unit_weight": 9.81}
+    doc["study"] = normal_phi(samples=5, seed=2, compute="verdict")
+    path = tmp_path / "dry.yaml"
+    path.write_text(yaml.safe_dump(doc, sort_keys=False))
+    r = invoke("study", path, "--out", tmp_path / "out", "--workers", "0")
+    assert r.exit_code == 0, r.output
+    import pandas as pd
+
+    table = pd.read_csv(tmp_path / "out" / "samples.csv")
+    assert table["warnings"].str.startswith("loads.water_table lies at or below").all()
+    summary = json.loads((tmp_path / "out" / "summary.json").read_text())
+    assert summary["warned"]["samples"] == 5
+    [top] = summary["warned"]["top"]
+    assert top["samples"] == 5 and "(sample" not in top["warning"]
+    assert "warned: 5 of 5 samples carry a warning" in r.stdout
+    # stderr: the nominal model's warning once, not one per sample
+    assert r.stderr.count("water_table lies at or below") == 1
+
+
+def test_a_sample_without_warnings_has_none():
+    table, s = rockdem.study(plane_document(), normal_phi(samples=3, compute="verdict"), workers=0)
+    assert table["warnings"].isna().all() and s["warned"] == {"samples": 0, "top": []}

@@ -329,7 +329,7 @@ def mechanism_summary(analysis) -> dict[str, Any]:
     }
 
 
-def _bond_lost(analysis) -> list[str]:
+def bond_lost(analysis) -> list[str]:
     """The sentences saying that ``analysis`` depends on the number of spring
     points because points lost their bond (in tension or, brittle, in shear):
     on the terminal too, not only in the trust list (two wedges with a
@@ -351,7 +351,7 @@ def analysis_summary(analysis) -> dict[str, Any]:
     ``steps`` and ``evidence``.
     """
     mechanism = mechanism_summary(analysis)
-    mechanism["warnings"] = [*_bond_lost(analysis), *mechanism["warnings"]]
+    mechanism["warnings"] = [*bond_lost(analysis), *mechanism["warnings"]]
     return jsonable(
         {
             "stable": analysis.stable,
@@ -396,7 +396,7 @@ def fos_summary(fos) -> dict[str, Any]:
     failed, base = fos.failed_analysis, fos.stable_analysis
     shown = base if base is not None else failed  # no stable trial: the mechanism's
     mechanism = mechanism_summary(failed)
-    lost = _bond_lost(base) if base is not None and fos.value is not None else []
+    lost = bond_lost(base) if base is not None and fos.value is not None else []
     mechanism["warnings"] = [*toppling_caution(fos), *lost, *mechanism["warnings"]]
     return jsonable(
         {

@@ -208,6 +208,14 @@ def _print_summary(s: dict) -> None:
         # on stdout with the summary: it qualifies P(FS < 1) (found by fuzzing: a note
         # on stderr that said nothing of the weak tail the samples left out lay in)
         out.print(f"[yellow]left out[/yellow]: {escape(left['note'])}")
+    warned = s.get("warned") or {}
+    if warned.get("samples"):
+        out.print(
+            f"[yellow]warned[/yellow]: {warned['samples']} of {s['ok']} samples carry a warning "
+            "(the warnings column of samples.csv); the commonest:"
+        )
+        for w in warned["top"]:
+            out.print(f"  ({w['samples']}) {escape(w['warning'])}")
     files = ["samples.csv", "samples.parquet", "summary.json", *s.get("pictures", [])]
     if s.get("report"):
         files.append(Path(s["report"]).name)

@@ -64,6 +64,19 @@ def html_section(study, fig: Callable[..., str]) -> list[str]:
     left = s.get("left_out") or {}
     if left.get("note"):
         out.append(f'<p class="note"><strong>Samples left out.</strong> {esc(left["note"])}</p>')
+    warned = s.get("warned") or {}
+    if warned.get("samples"):
+        out.append(
+            f'<p class="note"><strong>Warnings.</strong> {warned["samples"]} of {s["ok"]} '
+            "samples carry a warning (the warnings column of samples.csv); the commonest:</p>"
+        )
+        out.append(
+            html_table(
+                ["warning", "samples"],
+                [(w["warning"], w["samples"]) for w in warned["top"]],
+                left=1,
+            )
+        )
     for stem, (figure, caption) in figures(table, s, names).items():
         out.append(fig(figure, esc(caption), stem, f"fig-study-{stem}"))
     sens = [r for r in s.get("sensitivity", []) if r["spearman"] is not None]

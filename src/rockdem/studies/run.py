@@ -14,6 +14,7 @@ import json
 import os
 import socket
 import time
+import warnings
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from pathlib import Path
@@ -22,7 +23,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from ..config.errors import Loc
-from ..errors import InputError
+from ..errors import InputError, ModelWarning
 from ..geometry.size import MAX_BLOCKS
 from . import keypath
 from .plan import Plan, prepare, sample_values
@@ -77,43 +78,77 @@ def evaluate(
     t0 = time.perf_counter()
     row: dict[str, Any] = {"sample": int(sample)}
     row.update({n: float(v) for n, v in zip(names, values, strict=True)})
-    try:
-        from ..config import build_model, validate_document
-
-        doc = keypath.apply(base, places, values)
-        where = f"{source} (sample {sample})"
-        cfg = validate_document(doc, source=where)
-        model = build_model(cfg, source=where, max_blocks=max_blocks)
-        if compute == "fos":
-            from ..strength_reduction import factor_of_safety
-
-            f = factor_of_safety(model, **cfg.analysis.strength_reduction.options())
-            lo, hi = f.bracket
-            row.update(fs=f.value, fs_low=lo, fs_high=hi, mode=f.mode, proof=f.proof)
-            if f.value is not None:
-                row["failed"] = bool(f.value < 1.0)
-            else:
-                row["failed"] = f.mode == "strength-independent"
-            state = f.failed_analysis
-            row["bolt_utilisation"] = _bolt_use(f.stable_analysis)
-        else:
-            from ..analysis import analyse
-
-            state = analyse(model)
-            row.update(mode="verdict", failed=not state.stable)
-            row["bolt_utilisation"] = _bolt_use(state)
-            row["proof"] = None if state.stable else state.evidence.proof
-        if state is not None:
-            moving = np.asarray(state.unstable, dtype=bool)
-            row["unstable_blocks"] = int(moving.sum())
-            row["unstable_area"] = float(state.system.blocks.area[moving].sum())
-    except InputError as exc:
-        row["error"] = str(exc)
-    except Exception as exc:  # a failing sample is a row, never a lost study
-        row["error"] = f"{type(exc).__name__}: {exc}"
+    noted = None
+    with warnings.catch_warnings(record=True) as heard:
+        warnings.simplefilter("always", ModelWarning)
+        try:
+            outputs, noted = _analyse(base, source, places, values, compute, sample, max_blocks)
+            row.update(outputs)
+        except InputError as exc:
+            row["error"] = str(exc)
+        except Exception as exc:  # a failing sample is a row, never a lost study
+            row["error"] = f"{type(exc).__name__}: {exc}"
+    own = [w for w in heard if issubclass(w.category, ModelWarning)]
+    for w in heard:  # other warnings as Python shows them
+        if w not in own:
+            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno, source=w.source)
+    if noted is not None:
+        # the sample's ModelWarnings are its row's, not one line each on the
+        # terminal (a thousand samples, a thousand lines); its place is the row
+        prefix = f"{source} (sample {sample}): "
+        texts = [" ".join(str(w.message).split()).removeprefix(prefix) for w in own]
+        row["warnings"] = " | ".join(dict.fromkeys([*texts, *noted])) or None
     row["seconds"] = time.perf_counter() - t0
     row["worker"] = f"{socket.gethostname()}:{os.getpid()}"
     return row
+
+
+def _analyse(base, source, places, values, compute, sample, max_blocks):
+    """The outputs of one sample, and what its result warns of besides the
+    ModelWarnings (raises what its model or analysis raises)."""
+    from ..config import build_model, validate_document
+
+    row: dict[str, Any] = {}
+    doc = keypath.apply(base, places, values)
+    where = f"{source} (sample {sample})"
+    cfg = validate_document(doc, source=where)
+    model = build_model(cfg, source=where, max_blocks=max_blocks)
+    if compute == "fos":
+        from ..strength_reduction import factor_of_safety
+
+        f = factor_of_safety(model, **cfg.analysis.strength_reduction.options())
+        lo, hi = f.bracket
+        row.update(fs=f.value, fs_low=lo, fs_high=hi, mode=f.mode, proof=f.proof)
+        if f.value is not None:
+            row["failed"] = bool(f.value < 1.0)
+        else:
+            row["failed"] = f.mode == "strength-independent"
+        state, limit = f.failed_analysis, f.stable_analysis
+        row["bolt_utilisation"] = _bolt_use(limit)
+    else:
+        from ..analysis import analyse
+
+        state = limit = analyse(model)
+        row.update(mode="verdict", failed=not state.stable)
+        row["bolt_utilisation"] = _bolt_use(state)
+        row["proof"] = None if state.stable else state.evidence.proof
+    if state is not None:
+        moving = np.asarray(state.unstable, dtype=bool)
+        row["unstable_blocks"] = int(moving.sum())
+        row["unstable_area"] = float(state.system.blocks.area[moving].sum())
+    return row, _result_warnings(state, limit)
+
+
+def _result_warnings(failed, limit) -> list[str]:
+    """A mechanism bounded by the model's cut, and spring points that lost
+    their bond (the result depends on their number): the warnings of a
+    result that are not ModelWarnings."""
+    from ..modes import boundary_contacts
+    from ..result_tables import bond_lost
+
+    texts = [c.message for c in boundary_contacts(failed)] if failed is not None else []
+    shown = limit if limit is not None else failed  # the state at the limit
+    return texts + (bond_lost(shown) if shown is not None else [])
 
 
 def _bolt_use(analysis) -> float:

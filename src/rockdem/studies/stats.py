@@ -59,7 +59,8 @@ def summarise(
     (sample numbers, lowest factor first), ``left_out`` (the samples with an
     error, why, and which way leaving them out biases ``pf``: see
     :func:`left_out`; ``distributions``, input -> distribution name, makes its
-    advice specific).
+    advice specific), ``warned`` (the samples whose analysis warned, and the
+    commonest warnings: :func:`warned`).
     """
     ok = table[table["error"].isna()]
     failed = int(ok["failed"].fillna(False).astype(bool).sum())
@@ -123,7 +124,27 @@ def summarise(
     out["sensitivity"] = sensitivity(ok, names, compute)
     out["worst"] = worst_samples(ok, compute, worst)
     out["left_out"] = left_out(table, names, out, distributions)
+    out["warned"] = warned(ok)
     return out
+
+
+#: the most common warnings a summary lists
+WARNINGS_LISTED = 5
+
+
+def warned(ok) -> dict[str, Any]:
+    """How many samples (without error) carried a warning, and the most common
+    warnings with their counts (``samples``, ``top``: [{"warning", "samples"}])."""
+    if "warnings" not in ok:
+        return {"samples": 0, "top": []}
+    texts = ok["warnings"].dropna()
+    texts = texts[texts.astype(str).str.len() > 0]
+    counts: dict[str, int] = {}
+    for joined in texts:
+        for text in str(joined).split(" | "):
+            counts[text] = counts.get(text, 0) + 1
+    top = sorted(counts.items(), key=lambda kv: (-kv[1], kv[0]))[:WARNINGS_LISTED]
+    return {"samples": len(texts), "top": [{"warning": w, "samples": n} for w, n in top]}
 
 
 #: A side of the valid range holding at least this share of the samples left out is

@@ -38,6 +38,7 @@ OUTPUTS: dict[str, str] = {
     "unstable_area": "float",  # their area
     "bolt_utilisation": "float",  # largest bolt force / capacity at the last equilibrium
     "error": "str",  # why the sample has no result
+    "warnings": "str",  # what the sample's analysis warned of (" | " between them)
     "seconds": "float",  # wall time of the sample
     "worker": "str",  # host:pid that ran it
 }
