@@ -362,9 +362,21 @@ class FactorOfSafety:
         (proven: no admissible force field), ``"dynamic-relaxation"``
         (confirmed by the second solver a little beyond it) or
         ``"undecided"`` (nothing settles it: the factor of safety may be
-        higher); None without a failed trial."""
+        higher); None without a failed trial.
+
+        A strength-independent result shows the slope's own failure (at the
+        starting factor) but states that the slope fails at the top of its
+        bracket, the smallest factor tried: its proof is that trial's (a
+        slope toppled by its joint water, r_u 0.27, read "lp-certificate"
+        from the LP at F = 1, while at the top, F = 0.0585, the LP found an
+        admissible field and only dynamic relaxation confirmed the failure;
+        found by the verdict audit)."""
         if self.failed_analysis is None:
             return None
+        if self.mode == "strength-independent":
+            top = [t for t in self.trials if not t.stable and t.factor == self.bracket[1]]
+            if top:
+                return top[-1].evidence.proof
         return self.failed_analysis.evidence.proof
 
     @property
