@@ -175,7 +175,10 @@ def _run_case(data: dict, source: str) -> dict[str, Any]:
     except InputError as exc:
         if exc.where.startswith(f"{source}: "):
             raise
-        key = exc.where.replace(f"{'wedge' if case == 'wedge' else case} ", f"{where}.", 1)
+        # "wedge active_dip" -> its key; "wedge" alone (no factor in [0.2, 5]) is
+        # the section's (hostile round 7: it was named `wedge` at line 1)
+        name = "wedge" if case == "wedge" else case
+        key = where if exc.where == name else exc.where.replace(f"{name} ", f"{where}.", 1)
         raise _fail(source, key, exc.problem, exc.fix) from None
     return {"case": case, "inputs": inputs, "result": result}
 

@@ -1,0 +1,56 @@
+"""Hostile testing, round 7: the leftovers of round 6 (`check` of a study's
+key paths, duplicate removal ids, empty trial names, the wedge case's line),
+then the Python API with bad arguments, JSON model files, explicit blocks
+with tiny features, plots and reports of every kind of result, `example`
+and the environment.  Each test failed before its fix."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import yaml
+from typer.testing import CliRunner
+
+from _cli import assert_refused
+from rockdem.cli import app
+
+runner = CliRunner()
+
+
+def invoke(*args):
+    return runner.invoke(app, [str(a) for a in args])
+
+
+def two_blocks(folder: Path, **extra) -> Path:
+    """Two 2 x 1 blocks stacked on a horizontal fixed plane, with ``extra``
+    top-level keys."""
+    doc = {
+        "units": "kN, m, kPa",
+        "materials": {"rock": {"unit_weight": 25}},
+        "joints": {"plane": {"normal_stiffness": 1.0e6, "friction_angle": 33}},
+        "blocks": [
+            {"fixed": True, "vertices": [[-8, -1], [8, -1], [8, 0], [-8, 0]]},
+            {"material": "rock", "vertices": [[0, 0], [2, 0], [2, 1], [0, 1]]},
+            {"material": "rock", "vertices": [[0, 1], [2, 1], [2, 2], [0, 2]]},
+        ],
+        **extra,
+    }
+    path = folder / "two.yaml"
+    path.write_text(yaml.safe_dump(doc, sort_keys=False))
+    return path
+
+
+# ------------------------------------------------------------ round 6's leftovers
+def test_a_wedge_case_without_a_factor_is_named_at_its_section(tmp_path):
+    """'no factor of safety between 0.2 and 5' was named `w.yaml:1: wedge`
+    (the function's name, the file's first line), not the case's key."""
+    case = tmp_path / "w.yaml"
+    case.write_text(
+        "units: kN, m, kPa\nlimit_equilibrium:\n  wedge:\n    active_weight: 100\n"
+        "    passive_weight: 100\n    active_dip: 1\n    passive_dip: 0.5\n"
+        "    active_friction: 89\n    passive_friction: 89\n    joint_friction: 89\n"
+    )
+    assert_refused(
+        invoke("le", case),
+        "w.yaml:3: limit_equilibrium.wedge: no factor of safety between 0.2 and 5",
+    )
