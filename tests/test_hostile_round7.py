@@ -54,3 +54,20 @@ def test_a_wedge_case_without_a_factor_is_named_at_its_section(tmp_path):
         invoke("le", case),
         "w.yaml:3: limit_equilibrium.wedge: no factor of safety between 0.2 and 5",
     )
+
+
+def test_a_block_removed_twice_is_refused(tmp_path):
+    """`remove.blocks: [2, 2]` (a typo for another id) was taken silently,
+    in the top-level removal and in a stabilisation trial's."""
+    assert_refused(
+        invoke("check", two_blocks(tmp_path, remove={"blocks": [2, 2]})),
+        "two.yaml:",
+        "remove.blocks: id 2 is listed twice (items 0 and 1); list each block once",
+    )
+    trials = {"trials": [{"name": "t", "remove": {"blocks": [1, 1]}}]}
+    assert_refused(
+        invoke("check", two_blocks(tmp_path, stabilisation=trials)),
+        "stabilisation.trials[0].remove.blocks: id 1 is listed twice",
+    )
+    r = invoke("check", two_blocks(tmp_path, remove={"blocks": [2]}))
+    assert r.exit_code == 0, r.output

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from typing import Literal
 
-from pydantic import Field, model_validator
+from pydantic import Field, field_validator, model_validator
 
 from .values import (
     Angle,
@@ -232,6 +232,20 @@ class RemoveSpec(_Section):
     profile: list[Point] | None = Field(default=None, min_length=2)
     """Generated slopes only: cut the slope down to this new ground profile
     `[[x, y], ...]` (left to right; everything above it is excavated)."""
+
+    @field_validator("blocks")
+    @classmethod
+    def _once(cls, blocks: list[int]) -> list[int]:
+        # (hostile round 7: `[3, 3]` was taken silently, a typo for another id)
+        seen: dict[int, int] = {}
+        for k, bid in enumerate(blocks):
+            if bid in seen:
+                raise ValueError(
+                    f"id {bid} is listed twice (items {seen[bid]} and {k}); list each block "
+                    "once (was another id meant?)"
+                )
+            seen[bid] = k
+        return blocks
 
 
 class PointLoadSpec(_Section):
