@@ -8,6 +8,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import pytest
 import yaml
 from typer.testing import CliRunner
 
@@ -71,3 +72,16 @@ def test_a_block_removed_twice_is_refused(tmp_path):
     )
     r = invoke("check", two_blocks(tmp_path, remove={"blocks": [2]}))
     assert r.exit_code == 0, r.output
+
+
+@pytest.mark.parametrize("section", ["trials", "stages"])
+@pytest.mark.parametrize("name", ["", "  "])
+def test_a_trial_or_stage_without_a_name_is_refused(tmp_path, section, name):
+    """A stabilisation trial (or stage) of `name: ''` was accepted: a row
+    without a label in the report, and two of them were not compared."""
+    design = {section: [{"name": name, "remove": {"blocks": [2]}}]}
+    assert_refused(
+        invoke("check", two_blocks(tmp_path, stabilisation=design)),
+        f"stabilisation.{section}[0].name: the {section[:-1]} has ",
+        "name; give it a name",
+    )

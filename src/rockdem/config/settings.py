@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from typing import Annotated, Literal
 
-from pydantic import Field, model_validator
+from pydantic import Field, field_validator, model_validator
 
 from ..model import MAX_ITERATIONS, MAX_LOAD_STEPS, TOLERANCE_RANGE
 from ..strength_reduction import MAX_TRIALS, trial_bound
@@ -91,6 +91,17 @@ class TrialSpec(_Section):
     """Then remove mechanism blocks until the target factor of safety is reached (as
     `rockdem stabilise` does), to see how much more removal the design needs."""
 
+    @field_validator("name")
+    @classmethod
+    def _named(cls, name: str) -> str:
+        # (hostile round 7: `name: ''` was taken, a trial with no label in the report)
+        if not name.strip():
+            raise ValueError(
+                f"the trial has {'an empty' if not name else 'a blank'} name; give it a name "
+                "(it labels the trial's row in the report)"
+            )
+        return name
+
 
 class SupportSearchSpec(_Section):
     """Where a support force is tried (the force itself is found by search)."""
@@ -137,6 +148,17 @@ class StageSpec(_Section):
     """Label of the stage in the report."""
     remove: RemoveSpec
     """What this stage removes (blocks, regions and/or a new profile)."""
+
+    @field_validator("name")
+    @classmethod
+    def _named(cls, name: str) -> str:
+        # (hostile round 7: `name: ''` was taken, a stage with no label in the report)
+        if not name.strip():
+            raise ValueError(
+                f"the stage has {'an empty' if not name else 'a blank'} name; give it a name "
+                "(it labels the stage's row in the report)"
+            )
+        return name
 
 
 class StabilisationSpec(_Section):
