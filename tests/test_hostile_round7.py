@@ -85,3 +85,28 @@ def test_a_trial_or_stage_without_a_name_is_refused(tmp_path, section, name):
         f"stabilisation.{section}[0].name: the {section[:-1]} has ",
         "name; give it a name",
     )
+
+
+def test_check_refuses_a_study_that_rockdem_study_would(tmp_path):
+    """A misspelt `study.inputs` key path passed `rockdem check` (exit 0,
+    "valid"); only `rockdem study` refused it.  So did a study whose median
+    is out of its key's range."""
+    study = {
+        "inputs": {"joints.plane.friction_angel": {"distribution": "normal", "mean": 33, "sd": 2}}
+    }
+    assert_refused(
+        invoke("check", two_blocks(tmp_path, study=study)),
+        "two.yaml:",
+        "study.inputs.joints.plane.friction_angel: no such number in the model",
+        "did you mean `friction_angle`?",
+    )
+    study = {
+        "inputs": {"joints.plane.friction_angle": {"distribution": "normal", "mean": 95, "sd": 2}}
+    }
+    assert_refused(
+        invoke("check", two_blocks(tmp_path, study=study)),
+        "(study inputs at their medians): joints.plane.friction_angle: 95.0 is out of range",
+    )
+    study = {"sweep": {"joints.plane.friction_angle": {"values": [30, 35]}}}
+    r = invoke("check", two_blocks(tmp_path, study=study))
+    assert r.exit_code == 0, r.output

@@ -11,6 +11,7 @@ from rich.table import Table
 from ..linalg import backend
 from ..units import parse_units
 from .common import (
+    _ROOT,
     DebugOpt,
     ExampleOpt,
     JsonOpt,
@@ -35,6 +36,12 @@ def check(
         from ..solver import build_system
 
         path, m, cfg = _load(model, example)
+        if cfg.study is not None:
+            # the study's key paths and its model at the medians, as `rockdem study`
+            # checks them (hostile round 7: a misspelt input path passed check)
+            from ..studies.plan import prepare
+
+            prepare(path, max_blocks=_ROOT["max_blocks"])
         system = build_system(m)
         summary = _check_summary(path, m, cfg, system)
         if json_:
