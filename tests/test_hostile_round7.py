@@ -110,3 +110,30 @@ def test_check_refuses_a_study_that_rockdem_study_would(tmp_path):
     study = {"sweep": {"joints.plane.friction_angle": {"values": [30, 35]}}}
     r = invoke("check", two_blocks(tmp_path, study=study))
     assert r.exit_code == 0, r.output
+
+
+# ------------------------------------------------------------ the Python API
+GROUND = [(-5, -1), (5, -1), (5, 0), (-5, 0)]
+SQUARE = [(0, 0), (1, 0), (1, 1), (0, 1)]
+
+
+@pytest.mark.parametrize("ids", [[0.7, 1.2], [True, False], [2**63, 1], [float("nan"), 1]])
+def test_block_ids_that_are_no_whole_numbers_are_refused(ids):
+    """`ids=[0.7, 1.2]` were truncated to 0 and 1 and `[True, False]` read
+    as 1 and 0, silently: results named blocks the user never numbered."""
+    import rockdem as rd
+
+    with pytest.raises(rd.InputError, match="block ids: must be whole numbers"):
+        rd.Blocks.from_polygons([GROUND, SQUARE], fixed=[True, False], ids=ids)
+    b = rd.Blocks.from_polygons([GROUND, SQUARE], fixed=[True, False], ids=[1.0, 2.0])
+    assert b.ids.tolist() == [1, 2]
+
+
+def test_a_bad_polygon_is_named_by_its_id_not_its_position():
+    """With `ids=[10, 20]`, a polygon of two vertices was 'block 1: needs at
+    least 3 (x, y) vertices': no block has id 1."""
+    import rockdem as rd
+
+    for bad in ([(0, 0), (1, 0)], [(0, 0), (1, float("nan")), (1, 1)]):
+        with pytest.raises(rd.InputError, match=r"^block 20: "):
+            rd.Blocks.from_polygons([GROUND, bad], fixed=[True, False], ids=[10, 20])

@@ -111,19 +111,13 @@ class Blocks:
         n = len(polygons)
         if n == 0:
             raise InputError("blocks", "no blocks were given", "give at least one polygon")
-        rings = []
-        for i, poly in enumerate(polygons):
-            xy = _as_vertices(poly, i)
-            rings.append(xy)
-        try:
-            ids_arr = np.arange(n) if ids is None else np.asarray(ids, dtype=np.int64)
-        except (OverflowError, TypeError, ValueError):
-            raise InputError(
-                "block ids", "must be whole numbers within 64 bits", "renumber the blocks"
-            ) from None
+        ids_arr = np.arange(n) if ids is None else _as_ids(ids)
         if ids_arr.shape != (n,) or len(np.unique(ids_arr)) != n:
             raise InputError("block ids", "must be one unique integer per block", "renumber")
         label = {i: int(ids_arr[i]) for i in range(n)}
+        # each block named by its id (hostile round 7: the position was taken
+        # for the id, "block 1" for the block of id 20)
+        rings = [_as_vertices(poly, label[i]) for i, poly in enumerate(polygons)]
         _check_spread(rings, label)
         extent = _extent(np.concatenate(rings))
         _check_resolution(np.concatenate(rings), extent)
@@ -241,6 +235,24 @@ class Blocks:
 
 
 # ---------------------------------------------------------------- helpers
+def _as_ids(ids) -> np.ndarray:
+    """Block ids as 64-bit integers: whole numbers, not flags or fractions
+    (hostile round 7: ``ids=[0.7, 1.2]`` were truncated to 0 and 1, silently)."""
+    try:
+        raw = np.asarray(ids)
+        if raw.dtype.kind == "f":
+            whole = np.isfinite(raw) & (raw == np.round(raw)) & (np.abs(raw) < 2.0**63)
+            if not whole.all():
+                raise TypeError
+        elif raw.dtype.kind not in "iu" or (raw.dtype.kind == "u" and (raw >= 2**63).any()):
+            raise TypeError
+        return raw.astype(np.int64)
+    except (OverflowError, TypeError, ValueError):
+        raise InputError(
+            "block ids", "must be whole numbers within 64 bits", "renumber the blocks"
+        ) from None
+
+
 def _as_vertices(poly, i: int) -> np.ndarray:
     if isinstance(poly, shapely.Polygon):
         if len(poly.interiors):
