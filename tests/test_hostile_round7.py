@@ -137,3 +137,19 @@ def test_a_bad_polygon_is_named_by_its_id_not_its_position():
     for bad in ([(0, 0), (1, 0)], [(0, 0), (1, float("nan")), (1, 1)]):
         with pytest.raises(rd.InputError, match=r"^block 20: "):
             rd.Blocks.from_polygons([GROUND, bad], fixed=[True, False], ids=[10, 20])
+
+
+def test_a_model_whose_every_block_is_fixed_is_refused():
+    """Built in Python, a model of fixed blocks only was analysed: 'stable',
+    and its factor of safety 'none (no-failure)' (a model file refuses it:
+    'every block is fixed')."""
+    import rockdem as rd
+
+    blocks = rd.Blocks.from_polygons([GROUND, SQUARE], fixed=True, unit_weight=25)
+    model = rd.Model(blocks, rd.Joint(normal_stiffness=1e6, friction_angle=30))
+    for run in (rd.analyse, rd.factor_of_safety):
+        with pytest.raises(rd.InputError, match="every block is fixed: nothing can move"):
+            run(model)
+
+
+# ------------------------------------------------------------ model files

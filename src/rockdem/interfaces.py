@@ -252,8 +252,12 @@ def check_held(blocks: Blocks, faces: Interfaces | None = None) -> None:
     """
     if faces is None:
         faces = find_interfaces(blocks)
-    if not (~blocks.fixed).any():
-        return
+    if not (~blocks.fixed).any():  # (hostile round 7: "stable", and FS "no failure")
+        raise InputError(
+            "blocks",
+            "every block is fixed: nothing can move, there is nothing to analyse",
+            "make the blocks that may move free (fixed=False)",
+        )
     loose = _unheld(blocks, faces)
     if not loose.size:
         return
