@@ -152,4 +152,21 @@ def test_a_model_whose_every_block_is_fixed_is_refused():
             run(model)
 
 
+@pytest.mark.parametrize("ground", [1.5, True, "twin"])
+def test_a_joint_given_by_no_index_or_by_a_shared_name_is_refused(ground):
+    """`ground=1.5` and `ground=True` were joint 1 (int() of them); a name
+    two joints of the table share was the first of them, silently."""
+    import rockdem as rd
+
+    blocks = rd.Blocks.from_polygons([GROUND, SQUARE], fixed=[True, False], unit_weight=25)
+    joints = [
+        rd.Joint(normal_stiffness=1e6, friction_angle=30),
+        rd.Joint(normal_stiffness=1e6, friction_angle=20, name="twin"),
+        rd.Joint(normal_stiffness=1e6, friction_angle=40, name="twin"),
+    ]
+    with pytest.raises(rd.InputError, match=r"^joint "):
+        rd.Model(blocks, joints, ground=ground)
+    assert rd.Model(blocks, joints, ground=1).ground == 1
+
+
 # ------------------------------------------------------------ model files

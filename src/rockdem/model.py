@@ -8,6 +8,7 @@ t, m, t/m^2); angles in degrees.
 
 from __future__ import annotations
 
+import numbers
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 
@@ -421,7 +422,19 @@ class Model:
             names = [j.name for j in self.joints]
             if key not in names:
                 raise InputError(f"joint {key!r}", "is not defined", f"use one of {names}")
+            if names.count(key) > 1:  # (hostile round 7: the first was taken, silently)
+                at = [i for i, n in enumerate(names) if n == key]
+                raise InputError(
+                    f"joint {key!r}",
+                    f"names joints {at[0]} and {at[1]} of the table",
+                    "give the joint by its index, or give the joints names of their own",
+                )
             return names.index(key)
+        # (hostile round 7: ground=1.5 and ground=True were joint 1)
+        if isinstance(key, bool) or not isinstance(key, numbers.Integral):
+            raise InputError(
+                f"joint {key!r}", "is no index or name", "give the joint's index or its name"
+            )
         if not 0 <= int(key) < len(self.joints):
             raise InputError(f"joint {key}", "index out of range", "use a defined joint")
         return int(key)
