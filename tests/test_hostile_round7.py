@@ -169,4 +169,14 @@ def test_a_joint_given_by_no_index_or_by_a_shared_name_is_refused(ground):
     assert rd.Model(blocks, joints, ground=1).ground == 1
 
 
+def test_line_joint_without_joint_lines_is_refused():
+    """`line_joint` without `joint_lines` was ignored, silently."""
+    import rockdem as rd
+
+    blocks = rd.Blocks.from_polygons([GROUND, SQUARE], fixed=[True, False], unit_weight=25)
+    rock = rd.Joint(normal_stiffness=1e6, friction_angle=30)
+    with pytest.raises(rd.InputError, match="model line_joint: is given without joint_lines"):
+        rd.Model(blocks, [rock, rock.ductile], line_joint=[1])
+
+
 # ------------------------------------------------------------ model files

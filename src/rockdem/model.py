@@ -399,6 +399,12 @@ class Model:
         object.__setattr__(self, "joints", joints)
         if self.ground is not None:
             object.__setattr__(self, "ground", self.joint_index(self.ground))
+        if self.joint_lines is None and self.line_joint is not None:
+            raise InputError(  # (hostile round 7: ignored, silently)
+                "model line_joint",
+                "is given without joint_lines: it names the joint of each line",
+                "give joint_lines too, or leave line_joint out",
+            )
         if self.joint_lines is not None:
             try:
                 lines = np.asarray(self.joint_lines, dtype=float).reshape(-1, 2, 2)
