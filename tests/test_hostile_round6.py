@@ -176,7 +176,7 @@ def test_a_units_note_with_a_control_character_is_refused(tmp_path, units):
     its escape coloured the terminal and a line break split the header."""
     path = two_blocks(tmp_path)
     path.write_text(path.read_text().replace("units: kN, m, kPa", f'units: "{units}"', 1))
-    line = assert_refused(invoke("check", path), "two.yaml: units: the note", "control character")
+    line = assert_refused(invoke("check", path), "two.yaml:1: units: the note", "control character")
     assert "\x1b" not in line
 
 

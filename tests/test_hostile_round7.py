@@ -180,3 +180,15 @@ def test_line_joint_without_joint_lines_is_refused():
 
 
 # ------------------------------------------------------------ model files
+def test_a_control_character_in_a_name_or_key_is_named_at_its_line(tmp_path):
+    """A name, a key or the units note holding a control character was
+    refused without its line ('k.yaml: bolts[0].name: ...')."""
+    base = two_blocks(tmp_path).read_text()
+    cases = [
+        (base.replace("units: kN, m, kPa", 'units: "kN\\tm"'), "m.yaml:1: units: the note"),
+        (base + 'name: "a\\eb"\n', f"m.yaml:{len(base.splitlines()) + 1}: name: the name"),
+        (base.replace("  plane:", '  "pl\\eane":'), "m.yaml:6: the key 'pl\\x1bane'"),
+    ]
+    for text, fragment in cases:
+        (tmp_path / "m.yaml").write_text(text)
+        assert_refused(invoke("check", tmp_path / "m.yaml"), fragment, "control character")

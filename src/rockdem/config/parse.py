@@ -27,7 +27,7 @@ import yaml
 
 from ..geometry.size import MAX_BLOCKS
 from .build import build_model
-from .errors import ModelFileError, _kind
+from .errors import Loc, ModelFileError, _keypath, _kind, _line
 from .spec import ModelFile
 from .toml_lines import TomlLines
 from .validate import validate_document
@@ -136,12 +136,13 @@ def _too_large(source: str, limit: int) -> ModelFileError:
     )
 
 
-def _check_keys(data: dict, source: str) -> None:
+def _check_keys(data: dict, source: str, nodes: Any = None) -> None:
     """Refuse control characters in every key, in the ``units`` note and in
     every ``name`` (the
     model's, a bolt's, a support's, a load's: printed in tables and reports;
     fuzzing: a bolt named "B1\\nFAKE LINE\\x1b[31m" wrote a line of its own and
-    coloured the terminal)."""
+    coloured the terminal).  Each is named at its line (hostile round 7: the
+    line was left out)."""
     units = data.get("units") if isinstance(data, dict) else None
     if isinstance(units, str) and _CONTROL.search(units):
         # (hostile testing: an escape in the note coloured the terminal in
@@ -151,18 +152,20 @@ def _check_keys(data: dict, source: str) -> None:
             "units",
             f"the note {units!r} holds a control character (a line break, tab or escape)",
             "write the units on one line, for example 'kN, m, kPa'",
+            _line(nodes, ("units",)),
         )
-    todo: list[tuple[Any, str]] = [(data, "")]
+    todo: list[tuple[Any, Loc]] = [(data, ())]
     while todo:
-        item, path = todo.pop()
+        item, loc = todo.pop()
         if isinstance(item, dict):
             for key in item:
-                _check_name(key, source)
+                _check_name(key, source, line=_line(nodes, (*loc, key)))
             if isinstance(item.get("name"), str):
-                _check_name(item["name"], source, f"{path}.name" if path else "name")
-            todo.extend((v, f"{path}.{k}" if path else str(k)) for k, v in item.items())
+                where = (*loc, "name")
+                _check_name(item["name"], source, _keypath(where), _line(nodes, where))
+            todo.extend((v, (*loc, k)) for k, v in item.items())
         elif isinstance(item, list):
-            todo.extend((v, f"{path}[{i}]") for i, v in enumerate(item))
+            todo.extend((v, (*loc, i)) for i, v in enumerate(item))
 
 
 #: control characters (line breaks, escapes): never in a key or a name, which
@@ -171,7 +174,7 @@ def _check_keys(data: dict, source: str) -> None:
 _CONTROL = re.compile(r"[\x00-\x1f\x7f-\x9f\u2028\u2029]")
 
 
-def _check_name(key: Any, source: str, where: str | None = None) -> None:
+def _check_name(key: Any, source: str, where: str | None = None, line: int | None = None) -> None:
     if isinstance(key, str) and _CONTROL.search(key):
         raise ModelFileError(
             source,
@@ -179,6 +182,7 @@ def _check_name(key: Any, source: str, where: str | None = None) -> None:
             f"the {'name' if where else 'key'} {key!r} holds a control character "
             "(a line break, tab or escape)",
             "use letters, digits, spaces, '-' and '_'",
+            line,
         )
 
 
@@ -281,7 +285,7 @@ def _parse_document(text: str, fmt: str, source: str) -> tuple[dict, Any]:
             "start with keys such as `units:`, `joints:` and `blocks:`",
             1,
         )
-    _check_keys(data, source)
+    _check_keys(data, source, nodes)
     return data, nodes
 
 
