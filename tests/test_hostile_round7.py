@@ -192,3 +192,19 @@ def test_a_control_character_in_a_name_or_key_is_named_at_its_line(tmp_path):
     for text, fragment in cases:
         (tmp_path / "m.yaml").write_text(text)
         assert_refused(invoke("check", tmp_path / "m.yaml"), fragment, "control character")
+
+
+# ------------------------------------------------------------ the environment
+def test_a_misspelt_solver_refuses_the_analyses_not_the_help(monkeypatch):
+    """ROCKDEM_SOLVER=bogus refused `rockdem run --help` and `rockdem example
+    list` (checked in the root, before any subcommand); and `fos --json`
+    printed no JSON object for scripts."""
+    import json
+
+    monkeypatch.setenv("ROCKDEM_SOLVER", "bogus")
+    for args in (["run", "--help"], ["example", "list"], ["schema", "--help"]):
+        r = invoke(*args)
+        assert r.exit_code == 0, (args, r.output)
+    r = invoke("fos", "--example", "wedge-verification", "--json")
+    assert_refused(r, "error: ROCKDEM_SOLVER: 'bogus' is not a solver")
+    assert json.loads(r.stdout)["exit_code"] == 2
