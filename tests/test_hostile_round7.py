@@ -6,6 +6,9 @@ and the environment.  Each test failed before its fix."""
 
 from __future__ import annotations
 
+import os
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -208,3 +211,41 @@ def test_a_misspelt_solver_refuses_the_analyses_not_the_help(monkeypatch):
     r = invoke("fos", "--example", "wedge-verification", "--json")
     assert_refused(r, "error: ROCKDEM_SOLVER: 'bogus' is not a solver")
     assert json.loads(r.stdout)["exit_code"] == 2
+
+
+def _child(*args, cwd: Path, **env) -> subprocess.CompletedProcess:
+    """``python -m rockdem`` in a child process with ``env`` changed (None: unset)."""
+    full = {**os.environ, **{k: v for k, v in env.items() if v is not None}}
+    for key in [k for k, v in env.items() if v is None]:
+        full.pop(key, None)
+    return subprocess.run(
+        [sys.executable, "-m", "rockdem", *map(str, args)],
+        cwd=cwd,
+        capture_output=True,
+        text=True,
+        timeout=300,
+        env=full,
+    )
+
+
+@pytest.mark.skipif(not Path("/sys/kernel").is_dir(), reason="needs a read-only /sys")
+def test_a_read_only_home_adds_no_lines_of_matplotlib(tmp_path):
+    """With HOME on a read-only file system, `rockdem plot` wrote matplotlib's
+    two lines ('mkdir -p failed ...', 'Matplotlib created a temporary cache
+    directory ...') to stderr before the picture's path."""
+    model = two_blocks(tmp_path)
+    unset = dict.fromkeys(("MPLCONFIGDIR", "XDG_CONFIG_HOME", "XDG_CACHE_HOME"))
+    r = _child(
+        "plot",
+        model,
+        "--what",
+        "model",
+        "--out",
+        "m.png",
+        cwd=tmp_path,
+        HOME="/sys/kernel",
+        **unset,
+    )
+    assert r.returncode == 0, r.stderr
+    assert r.stderr == "", r.stderr
+    assert (tmp_path / "m.png").stat().st_size > 0

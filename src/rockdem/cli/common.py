@@ -161,6 +161,27 @@ def _root(
     _ROOT["max_blocks"] = max_blocks
     _JSON_PRINTED = False
     _show_warnings()
+    _quiet_matplotlib_home()
+
+
+def _matplotlib_home_note(record) -> bool:
+    """False for matplotlib's two lines about a configuration folder it could
+    not create (a read-only HOME): it uses a temporary folder instead, which
+    is all the fix there is."""
+    text = str(record.msg)
+    return not text.startswith(
+        ("mkdir -p failed for path", "Matplotlib created a temporary cache directory")
+    )
+
+
+def _quiet_matplotlib_home() -> None:
+    """Drop matplotlib's warning about a read-only HOME (hostile round 7: two
+    lines on stderr before every picture, a command's output being one line)."""
+    import logging
+
+    log = logging.getLogger("matplotlib")
+    if _matplotlib_home_note not in log.filters:
+        log.addFilter(_matplotlib_home_note)
 
 
 def _check_solver_choice() -> None:
