@@ -214,7 +214,8 @@ def test_a_misspelt_solver_refuses_the_analyses_not_the_help(monkeypatch):
 
 
 def _child(*args, cwd: Path, **env) -> subprocess.CompletedProcess:
-    """``python -m rockdem`` in a child process with ``env`` changed (None: unset)."""
+    """``python -m rockdem`` in a child process with ``env`` changed (None: unset);
+    its output read in the encoding it was asked to write (PYTHONIOENCODING)."""
     full = {**os.environ, **{k: v for k, v in env.items() if v is not None}}
     for key in [k for k, v in env.items() if v is None]:
         full.pop(key, None)
@@ -222,7 +223,7 @@ def _child(*args, cwd: Path, **env) -> subprocess.CompletedProcess:
         [sys.executable, "-m", "rockdem", *map(str, args)],
         cwd=cwd,
         capture_output=True,
-        text=True,
+        encoding=env.get("PYTHONIOENCODING") or "utf-8",
         timeout=300,
         env=full,
     )
@@ -249,3 +250,16 @@ def test_a_read_only_home_adds_no_lines_of_matplotlib(tmp_path):
     assert r.returncode == 0, r.stderr
     assert r.stderr == "", r.stderr
     assert (tmp_path / "m.png").stat().st_size > 0
+
+
+@pytest.mark.parametrize("encoding", ["ascii", "latin-1"])
+def test_a_terminal_that_cannot_show_the_name_gets_escapes(tmp_path, encoding):
+    """On an ASCII (LANG=C) or Latin-1 terminal a model named "Böschung –
+    Süd" stopped `rockdem check` with 'the analysis failed:
+    UnicodeEncodeError', exit 1: the model was fine."""
+    model = two_blocks(tmp_path, name="Böschung – Süd")
+    r = _child("check", model, cwd=tmp_path, PYTHONIOENCODING=encoding)
+    assert r.returncode == 0, r.stderr
+    assert "\\u2013 S" in r.stdout and "valid" in r.stdout
+    r = _child("check", tmp_path / "nö.yaml", cwd=tmp_path, PYTHONIOENCODING=encoding)
+    assert r.returncode == 2 and "file not found" in r.stderr, r.stderr

@@ -4,6 +4,7 @@ errors and exit codes, loading the model, progress bars and JSON output."""
 from __future__ import annotations
 
 import json
+import sys
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
@@ -162,6 +163,25 @@ def _root(
     _JSON_PRINTED = False
     _show_warnings()
     _quiet_matplotlib_home()
+    _tolerant_output()
+
+
+def _tolerant_output() -> None:
+    """Write what a terminal's encoding cannot show as escapes (``\\xf6``).
+    Found by hostile testing: under LANG=C (ASCII) or a Latin-1 terminal, a
+    model named "Böschung – Süd" stopped `rockdem check` with "the analysis
+    failed: UnicodeEncodeError", exit 1."""
+    import codecs
+
+    for stream in (sys.stdout, sys.stderr):
+        reconfigure = getattr(stream, "reconfigure", None)
+        encoding = getattr(stream, "encoding", None) or "utf-8"
+        try:
+            utf = codecs.lookup(encoding).name.startswith("utf")
+        except LookupError:
+            utf = False
+        if reconfigure is not None and not utf:
+            reconfigure(errors="backslashreplace")
 
 
 def _matplotlib_home_note(record) -> bool:
