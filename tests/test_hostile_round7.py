@@ -263,3 +263,15 @@ def test_a_terminal_that_cannot_show_the_name_gets_escapes(tmp_path, encoding):
     assert "\\u2013 S" in r.stdout and "valid" in r.stdout
     r = _child("check", tmp_path / "nö.yaml", cwd=tmp_path, PYTHONIOENCODING=encoding)
     assert r.returncode == 2 and "file not found" in r.stderr, r.stderr
+
+
+def test_a_narrow_terminal_cuts_no_table_cells(tmp_path):
+    """With COLUMNS=20 the tables of `check` and `run` cut their cells to
+    '…': 'inter…', blocks '2…' for 26-27, the numbers lost."""
+    model = two_blocks(tmp_path)
+    r = _child("check", model, cwd=tmp_path, COLUMNS="20")
+    assert r.returncode == 0, r.stderr
+    assert "…" not in r.stdout and "total length" in r.stdout
+    r = _child("run", "--example", "wedge-verification", "--quiet", cwd=tmp_path, COLUMNS="20")
+    assert r.returncode == 0, r.stderr
+    assert "…" not in r.stdout and "first step" in r.stdout

@@ -84,6 +84,10 @@ class _Console(Console):
 
 
 out = _Console(highlight=False, soft_wrap=True)
+#: the narrowest the tables are laid out for: on a narrower terminal (or
+#: COLUMNS), they are written as wide and the terminal wraps them, where rich
+#: cut their cells to "…" (the text lines are never cut: soft_wrap)
+MIN_WIDTH = 80
 err = Console(stderr=True, highlight=False, soft_wrap=True)
 
 
@@ -164,6 +168,8 @@ def _root(
     _show_warnings()
     _quiet_matplotlib_home()
     _tolerant_output()
+    if out.width < MIN_WIDTH:  # (hostile round 7: COLUMNS=20 cut table cells to "2…")
+        out.width = MIN_WIDTH
 
 
 def _tolerant_output() -> None:
