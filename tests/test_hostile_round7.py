@@ -142,6 +142,16 @@ def test_a_bad_polygon_is_named_by_its_id_not_its_position():
             rd.Blocks.from_polygons([GROUND, bad], fixed=[True, False], ids=[10, 20])
 
 
+def test_vertices_written_as_text_are_refused():
+    """`[("0", "0"), ("1", "0"), ("1", "1")]` was taken as numbers, where a
+    Joint refuses friction_angle="30" as 'not a number'."""
+    import rockdem as rd
+
+    text = [("0", "0"), ("1", "0"), ("1", "1")]
+    with pytest.raises(rd.InputError, match="block 1: vertices are not numbers"):
+        rd.Blocks.from_polygons([GROUND, text], fixed=[True, False])
+
+
 def test_a_model_whose_every_block_is_fixed_is_refused():
     """Built in Python, a model of fixed blocks only was analysed: 'stable',
     and its factor of safety 'none (no-failure)' (a model file refuses it:

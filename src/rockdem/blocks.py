@@ -260,6 +260,9 @@ def _as_vertices(poly, i: int) -> np.ndarray:
         xy = np.asarray(poly.exterior.coords)[:-1]
     else:
         try:
+            raw = np.asarray(poly)
+            if raw.dtype.kind in "USb":  # (hostile round 7: "0" was taken as 0.0, as
+                raise TypeError  # a Joint's friction_angle="30" is not)
             xy = np.asarray(poly, dtype=float)
         except (TypeError, ValueError) as exc:
             raise InputError(f"block {i}", "vertices are not numbers", "give (x, y) pairs") from exc
