@@ -309,3 +309,12 @@ def test_a_sliver_between_two_blocks_on_flat_ground_stands():
     blocks = rd.Blocks.from_polygons(polygons, fixed=[True, False, False, False], unit_weight=25)
     model = rd.Model(blocks, rd.Joint(normal_stiffness=1e6, friction_angle=30))
     assert rd.analyse(model).stable
+
+
+def test_example_copys_overwrite_says_it_replaces_the_model_file():
+    """`rockdem example copy --help` said --overwrite would 'Replace result
+    files that exist already'; it replaces the model file of that name, the
+    user's edited copy too."""
+    r = invoke("example", "copy", "--help")
+    assert r.exit_code == 0
+    assert "result files" not in r.stdout and "edited copy" in " ".join(r.stdout.split())

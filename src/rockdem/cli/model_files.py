@@ -10,7 +10,7 @@ from typing import Annotated
 import typer
 from rich.markup import escape
 
-from .common import DebugOpt, OverwriteOpt, _guard, out
+from .common import DebugOpt, _guard, out
 
 
 # ------------------------------------------------------------------ schema
@@ -64,7 +64,15 @@ def example_list() -> None:
 def example_copy(
     name: Annotated[str, typer.Argument(help="Example name (see `rockdem example list`).")],
     folder: Annotated[Path, typer.Argument(help="Folder to copy it into (created if needed).")],
-    overwrite: OverwriteOpt = False,
+    overwrite: Annotated[
+        bool,
+        typer.Option(
+            "--overwrite",
+            # (hostile round 7: it read "Replace result files", but replaces the
+            # model file of that name, an edited copy of the example too)
+            help="Replace the model file of that name if it exists (an edited copy too).",
+        ),
+    ] = False,
     debug: DebugOpt = False,
 ) -> None:
     """Copy a bundled example into a folder, to edit and run.
