@@ -318,3 +318,22 @@ def test_example_copys_overwrite_says_it_replaces_the_model_file():
     r = invoke("example", "copy", "--help")
     assert r.exit_code == 0
     assert "result files" not in r.stdout and "edited copy" in " ".join(r.stdout.split())
+
+
+@pytest.mark.parametrize(
+    ("key", "value", "problem"),
+    [
+        ("workers", 1.5, "workers: 1.5 is not a whole number"),
+        ("workers", "2", "workers: '2' is not a whole number"),
+        ("out", 5, "out: 5 is not a folder's path"),
+    ],
+)
+def test_rockdem_study_names_a_bad_argument(tmp_path, key, value, problem):
+    """`rockdem.study(..., workers=1.5)` (or "2", or out=5) was a TypeError
+    from deep inside ('float' object cannot be interpreted as an integer)."""
+    import rockdem as rd
+
+    spec = {"sweep": {"joints.plane.friction_angle": {"values": [30, 35]}}}
+    kw = {"out": tmp_path / "s", "workers": 0, key: value}
+    with pytest.raises(rd.InputError, match=problem):
+        rd.study(two_blocks(tmp_path), spec, **kw)

@@ -11,6 +11,7 @@ through :mod:`rockdem.config` and runs :func:`rockdem.factor_of_safety` (or
 from __future__ import annotations
 
 import json
+import numbers
 import os
 import socket
 import time
@@ -248,8 +249,14 @@ def study(
         import pyarrow  # noqa: F401
     except ImportError:
         raise InputError("rockdem study", "needs pandas and pyarrow", INSTALL_HINT) from None
-    if workers is not None and (isinstance(workers, bool) or workers < 0):
+    if workers is not None and (
+        isinstance(workers, bool) or not isinstance(workers, numbers.Integral)
+    ):  # (hostile round 7: 1.5 and "2" were TypeErrors from deep inside)
+        raise InputError("workers", f"{workers!r} is not a whole number", "give 0 or more")
+    if workers is not None and workers < 0:
         raise InputError("workers", f"{workers!r} is out of range", "give 0 or more")
+    if out is not None and not isinstance(out, str | os.PathLike):
+        raise InputError("out", f"{out!r} is not a folder's path", "give a path, or None")
     if workers is not None and client is not None:
         raise InputError("workers", "is for the local cluster", "give workers or a client")
     if isinstance(client, str):
