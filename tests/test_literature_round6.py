@@ -488,7 +488,9 @@ def test_the_dem_arch_collapses_at_the_limit_analysis_kh(t_over_r):
 
 
 @pytest.mark.xfail(
-    strict=True,
+    # not strict: the explicit dynamics is chaotic, and with OpenBLAS's
+    # Sandybridge kernels the arch at 0.995 kh_c reads undecided (passes)
+    strict=False,
     reason="an arch of t/R = 0.2 at 0.98-0.995 kh_c with 5 spring points: no Newton start, "
     "and dynamic relaxation under the solve's law reads its creep (0.07 x the elastic "
     "displacement over the last quarter, never slowing) as a mechanism although the "
