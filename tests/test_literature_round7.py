@@ -14,6 +14,11 @@ are computed here, from the source's statics, not by rockdem.
   force.  Each wedge in force equilibrium with total normal forces N and
   shear (c L + (N - U) tan(phi)) / F against the relative slip; the factor
   of safety and the critical acceleration Kc (Sarma's), at several tables;
+* the same wedges with Bishop's pore-pressure ratio (Bishop & Morgenstern
+  1960, Geotechnique 10, the r_u Sarma's method is stated with): u = r_u
+  gamma (s(x) - y) on all three joints, s the top of the rock above the
+  point (rockdem's definition), integrated here; r_u 0.1-0.3, factors down
+  to 0.80;
 * anchored plane failure (Hoek & Bray 1981 ch. 7; Wyllie & Mah 2004, Rock
   Slope Engineering 4th ed., sec. 6.5): a block behind a vertical tension
   crack, the crack and plane with water, an anchor plunging psi_T below the
@@ -65,16 +70,16 @@ def _area(poly) -> float:
     return abs((x * np.roll(y, -1) - np.roll(x, -1) * y).sum()) / 2
 
 
-def _water_force(p, q, table) -> float:
-    """Resultant of u = gamma_w max(h(x) - y, 0) on the segment p-q (the table
-    level beyond its ends), by adaptive quadrature: independent of rockdem's
-    piecewise exact integration."""
+def _pressure_force(p, q, head, unit_weight=GAMMA_W) -> float:
+    """Resultant of u = unit_weight max(head(x) - y, 0) on the segment p-q,
+    ``head`` a polyline (level beyond its ends), by adaptive quadrature:
+    independent of rockdem's piecewise exact integration."""
     p, q = np.asarray(p, float), np.asarray(q, float)
-    xs, hs = zip(*table, strict=True)
+    xs, hs = zip(*head, strict=True)
 
     def u(s):
         x, y = p + s * (q - p)
-        return GAMMA_W * max(float(np.interp(x, xs, hs)) - y, 0.0)
+        return unit_weight * max(float(np.interp(x, xs, hs)) - y, 0.0)
 
     return float(np.linalg.norm(q - p) * quad(u, 0.0, 1.0, limit=200, epsabs=1e-12)[0])
 
@@ -98,6 +103,13 @@ def _wedge_geometry(lean: int):
     return ground, [U, K, J], [K, T, C, J], (U, K, T, J)
 
 
+def _surface():
+    """The top of the rock: the crest, the face and the ground before the toe."""
+    _, _, b2, (_, _, T, _) = _wedge_geometry(1)
+    C = b2[2]
+    return ((-40.0, W_TOP), (float(C[0]), W_TOP), (float(T[0]), W_TOE), (40.0, W_TOE))
+
+
 def _table(level):
     """A water table from the toe T rising into the slope, below the face and
     the crest: straight to ``level`` above U, or ("high") through 6 m above
@@ -109,6 +121,8 @@ def _table(level):
 
 
 def _sarma_wet(upper, lower, between, lean, level, F=1.0, kh=0.0, between_water=True):
+    # ``level`` a water table's (see _table) or ("ru", r_u): Bishop's
+    # pore-pressure ratio, u = r_u gamma (s(x) - y) below the rock's top s
     """Round 5's statics of the two translating wedges (Sarma 1979; Hoek &
     Bray's active and passive blocks) with water: N1, N2, N3 the total normal
     forces on the upper base, lower base and the joint between the wedges,
@@ -118,10 +132,13 @@ def _sarma_wet(upper, lower, between, lean, level, F=1.0, kh=0.0, between_water=
     ``between_water=False`` leaves out U3 (to show that it matters).
     Returns (N1, N2, N3, P), (U1, U2, U3)."""
     _, b1, b2, (U, K, T, J) = _wedge_geometry(lean)
-    table = _table(level)
+    if isinstance(level, tuple):
+        head, unit = _surface(), level[1] * W_GAMMA
+    else:
+        head, unit = _table(level), GAMMA_W
     W1, W2 = W_GAMMA * _area(b1), W_GAMMA * _area(b2)
     L1, L2, L3 = np.linalg.norm(K - U), np.linalg.norm(T - K), np.linalg.norm(J - K)
-    water = (_water_force(U, K, table), _water_force(K, T, table), _water_force(K, J, table))
+    water = tuple(_pressure_force(p, q, head, unit) for p, q in ((U, K), (K, T), (K, J)))
     U1, U2, U3 = water
     U3 = U3 if between_water else 0.0
     e1, e2, t3 = (K - U) / L1, (T - K) / L2, (J - K) / L3
@@ -174,7 +191,10 @@ def _wet_wedges(upper, lower, between, lean, level, kh=0.0, points=3) -> rd.Mode
             normal_stiffness=1e6, friction_angle=phi, cohesion=c, residual_cohesion=c, name=name
         )
 
-    loads = rd.Loads(seismic_h=kh, water_table=_table(level), water_unit_weight=GAMMA_W)
+    if isinstance(level, tuple):
+        loads = rd.Loads(seismic_h=kh, pore_pressure_ratio=level[1])
+    else:
+        loads = rd.Loads(seismic_h=kh, water_table=_table(level), water_unit_weight=GAMMA_W)
     return rd.Model(
         blocks,
         [joint(between, "between"), joint(upper, "upper"), joint(lower, "lower")],
@@ -254,6 +274,59 @@ def test_two_wet_wedges_fail_at_sarma_s_critical_acceleration(upper, lower, betw
     assert kc > 0.02
     assert rd.analyse(_wet_wedges(*case, level, kh=0.98 * kc)).stable
     a = rd.analyse(_wet_wedges(*case, level, kh=1.02 * kc))
+    assert a.verdict == "unstable"
+    assert list(a.unstable_blocks) == [1, 2]
+
+
+# ------------------------------------- two wedges with a pore-pressure ratio
+@pytest.mark.parametrize("ru", [0.1, 0.2, 0.3])
+@pytest.mark.parametrize(("upper", "lower", "between", "lean"), WEDGE_CASES)
+def test_two_wedges_with_a_pore_pressure_ratio_at_sarma_s_factor(upper, lower, between, lean, ru):
+    """Bishop's pore-pressure ratio on the wedges (Bishop & Morgenstern 1960,
+    Geotechnique 10; Sarma 1979 states his method with it): u = r_u gamma
+    (s(x) - y) on all three joints, s the rock's top (crest, face, ground
+    before the toe).  Sarma's factor (the first case 1.124 / 0.959 / 0.799
+    at r_u 0.1 / 0.2 / 0.3, dry 1.293): the DEM's within 0.5% (measured
+    0.02%), below 1 too (strength reduction reports factors below 1)."""
+    case = (upper, lower, between, lean)
+    exact = _sarma_wet_fos(*case, ("ru", ru))
+    fos = rd.factor_of_safety(_wet_wedges(*case, ("ru", ru)), width=0.002)
+    assert fos.value == pytest.approx(exact, rel=0.005)
+    assert list(failure_modes(fos.failed_analysis).blocks("slides")) == [1, 2]
+
+
+def test_r_u_takes_its_water_from_the_rock_above_and_not_from_a_table():
+    """The reference's r_u forces on the three joints are the DEM's load (as
+    for the table above), and with r_u = 0.2 the factor of the second case
+    (1.033) lies 0.31 below its dry 1.345."""
+    case = WEDGE_CASES[1]
+    _, b1, b2, (U, K, T, J) = _wedge_geometry(case[3])
+    _, (U1, U2, U3) = _sarma_wet(*case, ("ru", 0.2))
+    wet = rd.build_system(_wet_wedges(*case, ("ru", 0.2)))
+    dry = rd.build_system(_wet_wedges(*case, -50.0))
+    water = wet.f_block - dry.f_block
+
+    def into(p, q, inside):
+        e = (q - p) / np.linalg.norm(q - p)
+        n = np.array([-e[1], e[0]])
+        return n if n @ (np.mean(inside, axis=0) - p) > 0 else -n
+
+    n1, n2, n3 = into(U, K, b1), into(K, T, b2), into(K, J, b1)
+    assert water[1, :2] == pytest.approx(U1 * n1 + U3 * n3, rel=1e-9)
+    assert water[2, :2] == pytest.approx(U2 * n2 - U3 * n3, rel=1e-9)
+    assert _sarma_wet_fos(*case, -50.0) - _sarma_wet_fos(*case, ("ru", 0.2)) > 0.3
+
+
+@pytest.mark.parametrize(("upper", "lower", "between", "lean"), WEDGE_CASES)
+def test_two_wedges_with_r_u_fail_at_sarma_s_critical_acceleration(upper, lower, between, lean):
+    """Sarma's Kc with r_u = 0.1 (0.067, 0.104, 0.132; the first case 0.157
+    dry): the DEM stands
+    at 0.98 Kc and both wedges slide at 1.02 Kc."""
+    case = (upper, lower, between, lean)
+    kc = _sarma_wet_kc(*case, ("ru", 0.1))
+    assert kc > 0.02
+    assert rd.analyse(_wet_wedges(*case, ("ru", 0.1), kh=0.98 * kc)).stable
+    a = rd.analyse(_wet_wedges(*case, ("ru", 0.1), kh=1.02 * kc))
     assert a.verdict == "unstable"
     assert list(a.unstable_blocks) == [1, 2]
 
