@@ -478,3 +478,40 @@ def test_the_anchor_force_for_limiting_equilibrium_is_both_equations(z_w, plunge
     a = rd.analyse(_anchored(z_w, 0.98 * T, plunge))
     assert a.verdict == "unstable"
     assert list(a.unstable_blocks) == [2]
+
+
+def test_rockdem_fos_says_which_factor_a_bolted_slope_gets(tmp_path):
+    """`rockdem fos` on the anchored block as a model file (the bundled
+    plane-failure-water example with phi 25, c 5 and the anchor sized for
+    1.5 by the active equation): 1.50, the bolt at its capacity, and a line
+    saying the bolt's force is not reduced, so that this is the tensioned
+    anchor's factor and not the passive dowel's (without it nothing said
+    which of Wyllie & Mah's two factors the number is)."""
+    from typer.testing import CliRunner
+
+    from rockdem.cli import app
+    from rockdem.examples import example_path
+
+    T = _least_anchor_force(A_DEPTH, 1.5, 20.0)
+    to_plane = (A_HEAD[1] - A_HEAD[0] * _tan(A_PLANE)) / (
+        math.sin(math.radians(20.0)) + math.cos(math.radians(20.0)) * _tan(A_PLANE)
+    )
+    text = example_path("plane-failure-water").read_text()
+    changed = text.replace(
+        "friction_angle: 35, cohesion: 10, residual_cohesion: 10",
+        "friction_angle: 25, cohesion: 5, residual_cohesion: 5",
+    )
+    assert changed != text
+    # the example faces -x: the head mirrored, the anchor at 180 + 20 degrees
+    changed += (
+        f"\nbolts:\n  - {{name: A1, head: [{-A_HEAD[0]}, {A_HEAD[1]}], angle: 200, "
+        f"length: {to_plane + 4.0}, capacity: {T}, axial_stiffness: 1.0e+5}}\n"
+    )
+    path = tmp_path / "anchored.yaml"
+    path.write_text(changed)
+    r = CliRunner().invoke(app, ["fos", str(path)], terminal_width=400)
+    assert r.exit_code == 0, r.output
+    assert "factor of safety: 1.50" in r.output
+    assert "A1: crosses 1 joint" in r.output and "(100% of capacity)" in r.output
+    assert "bolts' forces are not divided by F" in r.output
+    assert "tensioned anchor" in r.output

@@ -450,4 +450,14 @@ def _print_fos(doc: dict[str, Any]) -> None:
         out.print(f"mechanism blocks ({len(blocks)}, failed state at F = {at}): {_ids(blocks)}")
     _print_mechanism(doc)
     _print_bolts(doc, "bolts_at_limit", "bolts at the last equilibrium below the limit")
+    if doc["bolts_at_limit"]:
+        # (literature round 7: a dowel sized by Wyllie & Mah's passive equation
+        # for 1.5 read 2.02 here, and nothing said which factor this is)
+        out.print(
+            "  the bolts' forces are not divided by F (only the joints' strengths are): with a "
+            "bolt at its capacity this is the factor of a tensioned anchor, its force taken off "
+            "the driving force (Hoek & Bray; Wyllie & Mah, sec. 6.5), higher than the factor "
+            "of a passive dowel whose force is added to the resisting force (above 1 the two "
+            "differ; at 1 they agree)"
+        )
     out.print(f"definition: {escape(doc['definition'])}")
