@@ -43,6 +43,15 @@ springs share their assumptions; measured 0.02%).  Critical accelerations
 and the least anchor force at F = 1: decided 2% either side (as rounds 4
 and 5).  The water forces themselves: 1e-9 (both sides integrate a
 piecewise-linear pressure exactly).
+
+Findings.  The DEM reads every factor here within 0.02% (wedges under a
+table and with r_u, FS 0.80-1.53; the anchored block at its target factors)
+and decides every Kc and the anchor force at F = 1 at 0.98 / 1.02.  The
+water on the joint between the wedges matters: leaving it out of the
+reference moves it 2-3% under the high table.  What a user could misread:
+a bolt sized by Wyllie & Mah's passive equation for 1.5 reads 1.80-2.02
+(their active factor of that force); `rockdem fos` printed no word of which
+factor it is, and now says that the bolts' forces are not divided by F.
 """
 
 from __future__ import annotations
