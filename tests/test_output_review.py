@@ -474,3 +474,22 @@ def test_a_bond_lost_at_a_spring_point_is_a_warning_on_the_terminal(tmp_path, co
     assert any("failed in tension" in ln and "number of spring points" in ln for ln in lines)
     data = json.loads(runner.invoke(app, [command, str(path), "--json"]).stdout)
     assert any("failed in tension" in w for w in data["warnings"]), data["warnings"]
+
+
+def test_le_labels_the_effective_normal_force_with_water():
+    """`rockdem le` on a wet slope printed "N kN" beside the effective force
+    (884.1 of the 1,288.6 kN block, the water's taken off); dry it stays N
+    (literature round 7)."""
+    from typer.testing import CliRunner
+
+    from rockdem.cli import app
+
+    runner = CliRunner()
+    wet = runner.invoke(app, ["le", "-e", "plane-failure-water"])
+    assert wet.exit_code == 0, wet.output
+    header = next(ln for ln in wet.stdout.splitlines() if ln.startswith("face"))
+    assert "N' kN" in header.split("length")[1]
+    assert "N': the effective normal force" in wet.stdout
+    dry = runner.invoke(app, ["le", "-e", "wedge-verification"])
+    header = next(ln for ln in dry.stdout.splitlines() if ln.startswith("face"))
+    assert "N'" not in header and " N " in f" {header} "

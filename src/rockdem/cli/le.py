@@ -142,6 +142,12 @@ def _print_sarma(doc: dict[str, Any], r, fos, units) -> None:
     for i, body in enumerate(r.bodies):
         out.print(f"  {i}: blocks {_ids(body, 20)}")
     force = units.force if getattr(units, "force", None) else ""
+    shown = fos.stable_analysis or fos.failed_analysis
+    loads = shown.system.model.loads if shown is not None else None
+    wet = loads is not None and bool(loads.water_table or loads.pore_pressure_ratio)
+    # with water the normal force is the effective one, the water's taken off
+    # (literature round 7: 1200 read as the total 1408.8 on an anchored block)
+    normal = "N'" if wet else "N"
     table = Table(
         "face",
         "between",
@@ -149,7 +155,7 @@ def _print_sarma(doc: dict[str, Any], r, fos, units) -> None:
         "LE state",
         "joints",
         f"length {units.length or ''}".strip(),
-        f"N {force}".strip(),
+        f"{normal} {force}".strip(),
         f"S {force}".strip(),
         "DEM now",
         box=None,
@@ -170,6 +176,8 @@ def _print_sarma(doc: dict[str, Any], r, fos, units) -> None:
             escape(", ".join(states)),
         )
     out.print(table)
+    if wet:
+        out.print("  N': the effective normal force (the water's force on the face taken off)")
     out.print("where the two differ:")
     for note in r.notes:
         out.print(f"  - {escape(note)}")
