@@ -50,6 +50,7 @@ def _settle(
     resolution=None,
     first: Solve | None = None,
     proven=None,
+    limit_proof=None,
 ):
     """Solve at one load level, re-solving while committed failures shed strength.
 
@@ -71,6 +72,7 @@ def _settle(
         base_factor=base_factor,
         resolution=resolution,
         proven=proven,
+        limit_proof=limit_proof,
     )
     iterations, history = sol.iterations, list(sol.residuals)
     for _ in range(MAX_CASCADE):

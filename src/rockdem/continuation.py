@@ -14,10 +14,18 @@ for the limit: by the equilibrium LP on small models
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 
+from .limit import (
+    MECHANISM_REACH,
+    STALL_BELOW,
+    mechanism_slip,
+    predicted_limit,
+    pushed,
+    work_controlled,
+)
 from .linalg import norm
 from .relaxation import relax
 from .solver import Solve, System, newton, residual
@@ -55,9 +63,27 @@ LP_FIRST_SPRINGS = 500
 #: ... and on models of any size at this many resolutions of the search
 #: beyond the last equilibrium (the factor of safety's bracket width)
 PROOF_WIDTH = 4
+#: the equilibrium LP is tried at these shares of the search's width above
+#: the limit that work control found (the nearest first: the bracket it
+#: settles is that narrow)
+LIMIT_PROOF_SHARES = (0.125, 0.5, 1.0)
+#: the equilibrium at the limit work control found is taken this share below
+#: its factor (the plateau's factor is exact to round-off, 1 ulp above a
+#: block's tan(phi) / tan(dip); its equilibrium holds to the tolerance there)
+LIMIT_MARGIN = 1e-9
 #: the reason of an equilibrium found by dynamic relaxation that Newton could
 #: not polish (out-of-balance force within rockdem.relaxation.TOLERANCE)
 RELAXED = "converged by dynamic relaxation"
+
+
+@dataclass(frozen=True)
+class LimitProof:
+    """How the factor-of-safety search settles its bracket: ``proves(F)`` is
+    True when the equilibrium LP proves that no equilibrium exists at ``F``;
+    ``width`` is the bracket the search accepts."""
+
+    proves: Callable[[float], bool]
+    width: float
 
 
 def _release(system, state, load_factor, factor, max_it, resume=None, proven=None) -> Solve:
@@ -140,6 +166,7 @@ def solve_equilibrium(
     max_iterations: int | None = None,
     resolution: float | None = None,
     proven: Callable[[], bool] | None = None,
+    limit_proof: LimitProof | None = None,
 ) -> Solve:
     """Displacements in equilibrium with the loads, from the committed state.
 
@@ -155,7 +182,9 @@ def solve_equilibrium(
        is halved after a failure).  Equilibrium is declared lost only when a
        step smaller than ``resolution`` (default ``HOMOTOPY_MIN_STEP`` x the
        factor) fails; the result then reports the largest factor reached and
-       the one that failed.
+       the one that failed.  With ``limit_proof`` (the factor-of-safety
+       search) the homotopy stops as soon as the equilibrium LP proves
+       failure within ``limit_proof.width`` of its last equilibrium.
 
     No state is committed on the way.
     """
@@ -227,10 +256,13 @@ def solve_equilibrium(
         resolution if resolution is not None else HOMOTOPY_MIN_STEP * abs(target),
         max_it,
         (total, history, sol),
+        limit_proof,
     )
 
 
-def _strength_homotopy(system, state, lam, target, F_ok, q_ok, bad, smallest, max_it, so_far):
+def _strength_homotopy(
+    system, state, lam, target, F_ok, q_ok, bad, smallest, max_it, so_far, limit_proof=None
+):
     """Reduce the strength from ``F_ok`` (in equilibrium at ``q_ok``) to ``target``.
 
     A bracket search on the strength factor: the step grows x1.5 after a
@@ -258,7 +290,36 @@ def _strength_homotopy(system, state, lam, target, F_ok, q_ok, bad, smallest, ma
         step *= 0.5
     if step == 0:  # re-solving at the equilibrium's own factor: one more fresh attempt
         bad = (target, np.inf)
+    # the search for a factor of safety goes to the limit by work control
+    # once a failure shows the mechanism (rockdem.limit); not where committing
+    # the failures sheds strength (brittle joints: the limit of the trial's
+    # strengths is not the slope's), and the homotopies of a staged analysis
+    # keep their bisection alone
+    limit = None
+    if limit_proof is not None and target > F_ok and not system.sheds_strength:
+        limit = _LimitStep(system, state, lam, limit_proof)
+        if bad is not None and not last.converged:
+            limit.failed(last, q_ok)  # the caller's failed attempt at the target
     while True:
+        if limit is not None and limit.ready and limit.beyond_proven(bad):
+            found, iterations = limit.solve(F_ok, q_ok)
+            total += iterations
+            if found is not None:
+                F_lim, q_lim, top = found
+                reason = (
+                    f"no equilibrium beyond strength factor {F_lim:.6g} (the strengths divided "
+                    f"by it; found by work control); the equilibrium LP proves that none "
+                    f"exists at {top:.6g}"
+                )
+                resp = residual(system, q_lim, state, lam, F_lim)[0]
+                direction = last.direction
+                return Solve(
+                    False, q_lim, resp, total, history, reason, direction, F_lim, q_lim, top
+                )
+            # no proof there (toppling, non-associated friction: the LP's limit lies
+            # above the DEM's, and the equilibrium work control found, with the
+            # mechanism pushed along, is not on the trials' path): the homotopy goes
+            # on as it would have
         F_try = F_ok + step
         if bad is not None and abs(bad[0] - F_ok) < smallest:
             if bad[1] <= smallest * (1 + 1e-9):  # Newton failed from close by
@@ -307,6 +368,8 @@ def _strength_homotopy(system, state, lam, target, F_ok, q_ok, bad, smallest, ma
         trial = newton(system, state, lam, F_try, q_ok, min(max_it, HOMOTOPY_ITERATIONS))
         total += trial.iterations
         history += trial.residuals
+        if limit is not None and not trial.converged:
+            limit.failed(trial, q_ok)
         if trial.converged:
             if F_try == target:
                 return Solve(
@@ -325,6 +388,92 @@ def _strength_homotopy(system, state, lam, target, F_ok, q_ok, bad, smallest, ma
             last = trial
             bad = (F_try, abs(F_try - F_ok))
             step = 0.5 * (F_try - F_ok)
+
+
+class _LimitStep:
+    """The factor-of-safety search's step to the limit (rockdem.limit): once a
+    failed solve shows the mechanism, one work-controlled solve from the last
+    equilibrium; then the equilibrium LP at a little above the factor it
+    found, which settles the bracket where the LP is tight (planar sliding;
+    not toppling, where the homotopy goes on from there)."""
+
+    def __init__(self, system: System, state: SpringState, lam: float, proof: LimitProof):
+        self.system, self.state, self.lam, self.proof = system, state, lam, proof
+        self.slip: np.ndarray | None = None  # the mechanism of the last failure
+        self.done = False
+
+    @property
+    def ready(self) -> bool:
+        return self.slip is not None and not self.done
+
+    def beyond_proven(self, bad) -> bool:
+        """Does the LP prove the failure ``bad`` (factor, distance)?  The work
+        control goes only where it does: else the failure may be a stall
+        below the limit, or the LP not tight there (a near-flat benched
+        slope that stands up to F = 100: five work-controlled solves of
+        50-80 iterations for nothing)."""
+        if bad is None:
+            return False
+        proven = self.proof.proves(bad[0])
+        self.done = self.done or not proven
+        return proven
+
+    def failed(self, trial: Solve, q_from: np.ndarray) -> None:
+        """Take note of a failed solve that started from ``q_from``."""
+        slip = mechanism_slip(self.system, q_from, trial.q)
+        if slip is not None:
+            self.slip = slip
+
+    def solve(self, F_ok: float, q_ok: np.ndarray):
+        """``(limit, iterations)`` from the equilibrium at ``F_ok``: ``limit``
+        is ``(factor, q, top)``, an equilibrium at ``factor`` and the factor
+        ``top`` (at most the search's width above) where the LP proves
+        failure, or None.
+
+        Where the work lands below the plateau (the LP does not prove
+        failure just above), the mechanism is pushed further, while that
+        raises the factor.  Where the work-controlled solve stalls on a kink
+        close to the plateau (a 1,212-block slope: 2.6e-7 of the loads at
+        F = 1.46954, its exact limit), Newton at the fixed factor polishes
+        it."""
+        self.done = True
+        system, state, lam = self.system, self.state, self.lam
+        resp = residual(system, q_ok, state, lam, F_ok)[0]
+        ds = system.assembly.relative_displacement(self.slip)[1]
+        predicted = predicted_limit(resp, F_ok, ds, system.springs.weight)
+        if predicted is None or predicted <= F_ok:
+            return None, 0
+        q, factor, total = q_ok, predicted, 0
+        for reach in MECHANISM_REACH:
+            start = pushed(system, lam, q, self.slip, reach)
+            if start is None:
+                break
+            found = work_controlled(system, state, lam, start[0], factor, start[1])
+            total += found.iterations
+            near = found.converged or found.residuals[-1] <= STALL_BELOW
+            if found.factor <= max(F_ok, factor if q is not q_ok else F_ok) or not near:
+                break  # (no higher than before: a plateau where the LP is not tight)
+            # the plateau's factor is the limit to round-off: the equilibrium is
+            # taken a hair below it, checked by Newton at that fixed factor
+            at = found.factor * (1.0 - LIMIT_MARGIN)
+            polish = newton(system, state, lam, at, found.q, HOMOTOPY_ITERATIONS)
+            total += polish.iterations
+            if not polish.converged:
+                break
+            top = self.prove(at)
+            if top is not None:
+                return (at, polish.q, top), total
+            q, factor = polish.q, found.factor
+        return None, total
+
+    def prove(self, F_ok: float) -> float | None:
+        """The nearest factor above ``F_ok`` (by an eighth, a half or a whole of
+        the search's width) at which the LP proves failure, or None."""
+        for share in LIMIT_PROOF_SHARES:
+            top = F_ok + share * self.proof.width
+            if self.proof.proves(top):
+                return top
+        return None
 
 
 def _stall_check(system: System, state: SpringState, lam: float, factor: float, q0, within=None):

@@ -371,6 +371,15 @@ class _Unbalanced:
         return r
 
 
+def shows_mechanism(n_dof: int) -> bool:
+    """Is a failure the LP proved shown by a run on a model of ``n_dof``
+    unknowns?  Not where a run is too short to show it (the models whose
+    stalls are not checked either: see rockdem.continuation.stall_checked)."""
+    from .continuation import stall_checked
+
+    return stall_checked(n_dof)
+
+
 #: a run after a proof only shows the mechanism: segments of this many steps
 #: (the brick slopes' moving blocks were the same as with MAX_STEPS: 533 of
 #: 1,021 and 1,547 of 2,952; 2,952 blocks: search 9.5 -> 8.2 s)
@@ -450,6 +459,11 @@ def confirm_failed_trial(system, failed, base, factor: float, trials):
     q0[asm.dof[free].ravel()] = base.displacement[free].ravel()
     state = base.state.without_slip()
     look = not failed.evidence.certified  # proven: the run only shows the mechanism
+    if not look and not shows_mechanism(asm.n_dof):
+        # (its few blocks at the face would be discarded for Newton's mechanism
+        # anyway: rockdem.mechanism.first_movers; 9,638 blocks: 7.7 s of 75)
+        idle = Relaxation("undecided", q0, 0, float("nan"), 0.0)
+        return failed, list(trials), idle, factor * (1.0 + CONFIRM_MARGINS[0]), idle
     steps = MAX_STEPS if look else SHOW_STEPS
     first = None
     for margin in CONFIRM_MARGINS:
@@ -467,8 +481,10 @@ def confirm_failed_trial(system, failed, base, factor: float, trials):
         first = run if first is None else first
         if run.status != "undecided":  # a mechanism, or equilibrium: the limit was a stall
             break
-    run = _go_on(system, state, base.load_factor, beyond, run, steps, look)
-    run, shed = _shedding(system, state, base.load_factor, beyond, run, steps, look)
+    shed = ""
+    if look:  # (a proven failure's run only shows the mechanism: no more runs for it)
+        run = _go_on(system, state, base.load_factor, beyond, run, steps, look)
+        run, shed = _shedding(system, state, base.load_factor, beyond, run, steps, look)
     text = f"{run} at F = {beyond:.6g} ({margin:.0%} beyond the bracket)" + shed
     failed = with_relaxation(failed, text, beyond if run.status == "mechanism" else None)
     trials = list(trials)

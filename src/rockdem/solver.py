@@ -92,6 +92,8 @@ class System:
     factorizer: Factorizer = field(default_factory=Factorizer)
     #: bolt and cable crossings of the joints (rockdem.bolts), None without bolts
     bolts: Crossings | None = None
+    #: answers of the equilibrium LP already solved (rockdem.certificate.certificate_for)
+    certificates: dict = field(default_factory=dict)
 
     @property
     def scale_free(self) -> bool:
@@ -105,6 +107,19 @@ class System:
         s = self.springs
         strengths = (s.cohesion, s.cohesion_residual, s.tensile, s.tensile_residual)
         return self.bolts is None and not any(np.any(a) for a in strengths)
+
+    @property
+    def sheds_strength(self) -> bool:
+        """Can a spring lose strength when its failure is committed?  True
+        where a residual strength lies below the peak, or a tensile strength
+        breaks (brittle joints: progressive failure, the path matters)."""
+        s = self.springs
+        return bool(
+            np.any(s.cohesion_residual < s.cohesion)
+            or np.any(s.tan_phi_residual < s.tan_phi)
+            or np.any(s.tensile > 0)
+            or np.any(s.tensile_residual > 0)
+        )
 
     def __repr__(self) -> str:
         return (

@@ -24,7 +24,8 @@ from .analysis import (
     analyse,
     show_mechanism,
 )
-from .certificate import prove_failed_trial, upper_bound
+from .certificate import certificate_for, prove_failed_trial, upper_bound
+from .continuation import LimitProof
 from .errors import InputError, check_number
 from .mechanism import relaxation_mechanism
 from .model import Model
@@ -237,7 +238,7 @@ def factor_of_safety(
                 F = hint
             hint = None
             stage += 1
-            a, sol = _continue(system, lo_an, F, stage, resolution=width / 4)
+            a, sol = _continue(system, lo_an, F, stage, resolution=width / 4, width=width)
             record(F, a)
             if a.stable:
                 lo_an = a
@@ -357,11 +358,14 @@ def _continue(
     q0=None,
     resolution=None,
     base_factor: float | None = None,
+    width: float | None = None,
 ):
     """One strength trial from the converged state of ``base``: (Analysis, Solve).
 
     ``q0`` (default: the displacements of ``base``) is in equilibrium at
-    ``base_factor`` (default: ``base``'s factor)."""
+    ``base_factor`` (default: ``base``'s factor).  ``width``: the bracket
+    the search accepts; the trial stops where the equilibrium LP proves
+    failure within it of an equilibrium (see :class:`LimitProof`)."""
     asm = system.assembly
     free = ~system.blocks.fixed
     q_base = np.zeros(asm.n_dof)
@@ -370,7 +374,16 @@ def _continue(
     lam = base.load_factor
     start = base.state.without_slip()
     at = base.strength_factor if base_factor is None else base_factor
-    sol, state = _settle(system, start, q0, lam, factor, stage, at, True, resolution)
+    limit_proof = None
+    if width is not None:
+
+        def proves(F: float) -> bool:
+            return certificate_for(system, start, lam, F, quick=True).proves_failure
+
+        limit_proof = LimitProof(proves, width)
+    sol, state = _settle(
+        system, start, q0, lam, factor, stage, at, True, resolution, limit_proof=limit_proof
+    )
     ev = _evidence(sol)
     n_failed = int((state.yielded | state.broken).sum())
     step = Step(stage, lam, factor, sol.converged, ev, n_failed)
