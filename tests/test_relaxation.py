@@ -268,11 +268,18 @@ def test_an_undecided_confirmation_goes_on_while_the_budget_allows(monkeypatch):
     starts, real = [], relaxation.relax
 
     def relax_(system_, state, lam, factor, q0, **kw):
+        if kw.get("keep_slip"):  # (the second look of a run that moved: not counted)
+            return real(system_, state, lam, factor, q0, **kw)
         starts.append(q0.copy())
         run = real(system_, state, lam, factor, q0, **kw)
         return replace(run, status="undecided") if len(starts) <= 3 else run
 
     failed = rd.analyse(system, strength_factor=1.1 * fs)
+    assert failed.evidence.certified  # the LP proves it: the run would only show it
+    # ... so the LP's proof is taken away: this is about confirming a failure
+    last = failed.steps[-1]
+    unproven = replace(last, evidence=replace(last.evidence, certified=False))
+    failed = replace(failed, steps=(*failed.steps[:-1], unproven))
     monkeypatch.setattr(relaxation, "relax", relax_)
     trials = [Trial(1.1 * fs, False, failed.evidence)]
     _, _, run, beyond, _ = relaxation.confirm_failed_trial(system, failed, base, fs, trials)
@@ -280,6 +287,43 @@ def test_an_undecided_confirmation_goes_on_while_the_budget_allows(monkeypatch):
     assert len(starts) == 4  # the two margins, then two runs on from the last
     assert not np.array_equal(starts[3], starts[2])  # it went on from where it stopped
     assert beyond == pytest.approx(fs * 1.05)
+
+
+def test_a_proven_failure_is_shown_by_the_margins_runs_alone(monkeypatch):
+    """Where the LP proves the failure the run only shows how the blocks move:
+    an undecided run is not continued (9,638 blocks: the runs took 7.7 s of a
+    75 s search), and above 20,000 unknowns none is run (it would move only
+    the first blocks at the face, and Newton's mechanism is shown instead:
+    rockdem.mechanism.first_movers).  Block on a plane at 1.1 x the planar
+    sliding factor (Hoek & Bray 1981)."""
+    from dataclasses import replace
+
+    from rockdem import relaxation
+    from rockdem.results import Trial
+
+    dip, phi = 20, 30
+    model = V.block_on_plane(dip, rd.Joint(normal_stiffness=1e6, friction_angle=phi))
+    system = rd.build_system(model)
+    fs = V.sliding_fos(dip, phi)
+    base = rd.analyse(system, strength_factor=0.9 * fs)
+    failed = rd.analyse(system, strength_factor=1.1 * fs)
+    assert failed.evidence.certified
+    runs, real = [], relaxation.relax
+
+    def relax_(system_, state, lam, factor, q0, **kw):
+        runs.append(factor)
+        return replace(real(system_, state, lam, factor, q0, **kw), status="undecided")
+
+    monkeypatch.setattr(relaxation, "relax", relax_)
+    trials = [Trial(1.1 * fs, False, failed.evidence)]
+    shown, _, run, _, _ = relaxation.confirm_failed_trial(system, failed, base, fs, trials)
+    assert runs == pytest.approx([fs * 1.02, fs * 1.05])  # the two margins, no more
+    assert shown.evidence.proof == "lp-certificate"
+    monkeypatch.setattr(relaxation, "shows_mechanism", lambda n_dof: False)
+    runs.clear()
+    shown, _, run, _, _ = relaxation.confirm_failed_trial(system, failed, base, fs, trials)
+    assert runs == [] and run.steps == 0
+    assert shown.evidence.relaxation == failed.evidence.relaxation  # nothing said of a run
 
 
 def test_an_undecided_staged_failure_goes_on_while_the_budget_allows(monkeypatch):

@@ -221,8 +221,10 @@ def test_a_mechanism_only_at_the_farther_margin_widens_the_bracket_to_it(monkeyp
     not confirm the bracket [1.4307, 1.4316] (the search reported FS 1.431,
     -3.7%, as confirmed): the search goes on from the nearer run, and where
     Newton cannot, the bracket reaches the factor where the blocks moved
-    and still holds the limit."""
+    and still holds the limit.  (The step to the limit by work control,
+    which finds this limit, is switched off: this is about the bisection.)"""
     monkeypatch.setattr(continuation, "HOMOTOPY_ITERATIONS", 40)
+    monkeypatch.setattr(continuation, "MECHANISM_REACH", ())
     model, dip, phi = _sized_family(10)
     exact = np.tan(np.radians(phi)) / np.tan(np.radians(dip))
     fos = rd.factor_of_safety(model)
@@ -588,13 +590,15 @@ def test_a_deferred_mechanism_is_the_one_analyse_shows(model):
 
 
 @pytest.mark.slow
-def test_the_lp_bounds_a_limit_that_newton_stalls_below():
+def test_the_lp_bounds_a_limit_that_newton_stalls_below(monkeypatch):
     """The 2,322-block family slope (FS = tan phi / tan dip = 1.4866, Hoek &
-    Bray planar sliding): Newton stalls about 0.6% below the limit and
-    dynamic relaxation confirms failure only 2% beyond that.  The
+    Bray planar sliding) searched by bisection alone (the step to the limit
+    by work control switched off): Newton stalls about 0.6% below the limit
+    and dynamic relaxation confirms failure only 2% beyond that.  The
     equilibrium LP, bisected between the two, bounds the limit from above
     within 0.1%: the limit lies between the equilibrium found and that
     bound, and the value (Newton's, the conservative end) is unchanged."""
+    monkeypatch.setattr(continuation, "MECHANISM_REACH", ())
     model, dip, phi = _sized_family(10)
     exact = np.tan(np.radians(phi)) / np.tan(np.radians(dip))
     fos = rd.factor_of_safety(model)
@@ -625,3 +629,23 @@ def test_a_block_toppling_at_any_strength_shows_its_mechanism_in_the_trials():
     first = fos.trials[0]
     assert first.factor == failed.strength_factor == 1.0 and first.evidence is failed.evidence
     assert fos.trials[-1].factor == fos.bracket[1] < 0.06
+
+
+@pytest.mark.slow
+def test_work_control_reaches_the_limit_that_newton_stalls_below():
+    """The same 2,322-block slope as searched: the strength factor becomes
+    an unknown and the external work is prescribed (rockdem.limit), so the
+    search lands on the limit's plateau instead of stalling below it; the
+    LP proves failure an eighth of the width above.  Hoek & Bray's planar
+    sliding, tan(phi) / tan(dip) = 1.4866, lies in the bracket, which is
+    width / 8 wide, and the equilibrium at its lower end is within 1e-6
+    of it (it was 0.6% low, confirmed only by dynamic relaxation)."""
+    model, dip, phi = _sized_family(10)
+    exact = np.tan(np.radians(phi)) / np.tan(np.radians(dip))
+    fos = rd.factor_of_safety(model)
+    lo, hi = fos.bracket
+    assert fos.proof == "lp-certificate"
+    assert lo <= exact <= hi
+    assert hi - lo == pytest.approx(0.005 / 8)
+    assert lo == pytest.approx(exact, rel=1e-6)
+    assert "found by work control" in fos.failed_analysis.evidence.reason
