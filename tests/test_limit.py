@@ -1,0 +1,178 @@
+"""The limit state by work control (rockdem.limit): the strength factor as
+an unknown, the external work prescribed.
+
+Closed forms: a block on a plane (Hoek & Bray 1981, ch. 7: FS = tan(phi) /
+tan(dip)); generated slopes whose bedding daylights (the same, Hoek & Bray
+planar sliding); a brick slope of 1,021 blocks (tan 35 / tan 20).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import rockdem as rd
+from rockdem import continuation, limit
+from rockdem import verification as V
+from rockdem.linalg import norm
+from rockdem.solver import residual
+from rockdem.spring_law import SpringState
+
+
+def _free_q(system, analysis):
+    """The free-dof displacement vector of an analysis."""
+    asm = system.assembly
+    free = ~system.blocks.fixed
+    q = np.zeros(asm.n_dof)
+    q[asm.dof[free].ravel()] = analysis.displacement[free].ravel()
+    return q
+
+
+def _block(dip=20.0, phi=30.0, **joint):
+    joint = rd.Joint(normal_stiffness=1e6, friction_angle=phi, **joint)
+    return rd.build_system(V.block_on_plane(dip, joint))
+
+
+def _down_the_dip(system, dip):
+    """The block sliding down the plane: (ux, uy, w) = (cos d, -sin d, 0)."""
+    d = np.radians(dip)
+    return np.array([np.cos(d), -np.sin(d), 0.0])
+
+
+@pytest.mark.parametrize(("dip", "phi"), [(20, 30), (35, 40), (10, 12)])
+def test_a_block_on_a_plane_reaches_tan_phi_over_tan_dip_in_one_solve(dip, phi):
+    """From the equilibrium at F = 1, the block pushed down the dip by its
+    elastic displacement: the work-controlled solve lands on the plateau at
+    tan(phi) / tan(dip) (Hoek & Bray), to 1e-9, in a few iterations, and its
+    displacements are an equilibrium there."""
+    system = _block(dip, phi)
+    base = rd.analyse(system)
+    q0 = _free_q(system, base)
+    exact = V.sliding_fos(dip, phi)
+    state = base.state.without_slip()
+    start, work = limit.pushed(system, 1.0, q0, _down_the_dip(system, dip), 1.0)
+    found = limit.work_controlled(system, state, 1.0, start, 1.0, work)
+    assert found.converged and found.iterations <= 10
+    assert found.factor == pytest.approx(exact, rel=1e-9)
+    _, r = residual(system, found.q, state, 1.0, found.factor)
+    scale = system.assembly.dof_scale
+    assert norm(r * scale) <= 1e-8 * norm(system.f_ext * scale)
+    assert float(system.f_ext @ found.q) == pytest.approx(work, rel=1e-8)
+
+
+@pytest.mark.parametrize("share", [0.5, 0.9])
+def test_the_mechanism_predicts_a_plane_slide_from_any_equilibrium(share):
+    """A plane slide's springs carry the driving force wherever the factor
+    is: the share of their strength they mobilise predicts the limit
+    exactly (tan(phi) / tan(dip)) from an equilibrium at half or 0.9 of it."""
+    dip, phi = 25.0, 40.0
+    system = _block(dip, phi)
+    exact = V.sliding_fos(dip, phi)
+    at = rd.analyse(system, strength_factor=share * exact)
+    resp, _ = residual(system, _free_q(system, at), at.state, 1.0, share * exact)
+    ds = system.assembly.relative_displacement(_down_the_dip(system, dip))[1]
+    predicted = limit.predicted_limit(resp, share * exact, ds, system.springs.weight)
+    assert predicted == pytest.approx(exact, rel=1e-9)
+
+
+def test_the_strength_derivative_is_that_of_the_internal_force():
+    """g = d(B^T W p)/dt at fixed displacements (t = 1/F) against a central
+    difference, on a block whose springs slide (c, phi) and one whose joint
+    opens at its reduced tensile strength (a block hanging under a ledge)."""
+    dip = 30.0
+    system = _block(dip, 20.0, cohesion=5.0, residual_cohesion=5.0)
+    base = rd.analyse(system, strength_factor=0.5)
+    state = base.state.without_slip()
+    q = _free_q(system, base) + 1e-3 * _down_the_dip(system, dip)  # sliding
+    t, h = 1.0 / 1.2, 1e-6
+    resp, _ = residual(system, q, state, 1.0, 1.0 / t)
+    assert resp.sliding.any()
+    g = limit.strength_derivative(system, resp, t)
+
+    def internal(t_):
+        r = residual(system, q, state, 1.0, 1.0 / t_)[1]
+        return system.f_ext - r
+
+    fd = (internal(t + h) - internal(t - h)) / (2 * h)
+    assert g == pytest.approx(fd, rel=1e-5, abs=1e-9 * np.abs(fd).max())
+    # a joint open at its tensile strength: the tension scales with t too
+    ledge = rd.Blocks.from_polygons(
+        [[(-3, 0), (3, 0), (3, 2), (-3, 2)], [(-1, -1), (1, -1), (1, 0), (-1, 0)]],
+        fixed=[True, False],
+        unit_weight=25.0,
+    )
+    joint = rd.Joint(normal_stiffness=1e6, friction_angle=30, cohesion=50, tensile_strength=10)
+    hanging = rd.build_system(rd.Model(ledge, joint))
+    st = SpringState.initial(hanging.springs.n_springs)
+    q = np.array([0.0, -1.0, 0.0])  # pulled off the ledge: open
+    resp, _ = residual(hanging, q, st, 1.0, 1.0 / t)
+    assert resp.open.all()
+    g = limit.strength_derivative(hanging, resp, t)
+    fd = (
+        (hanging.f_ext - residual(hanging, q, st, 1.0, 1.0 / (t + h))[1])
+        - (hanging.f_ext - residual(hanging, q, st, 1.0, 1.0 / (t - h))[1])
+    ) / (2 * h)
+    assert g == pytest.approx(fd, rel=1e-5, abs=1e-9 * np.abs(fd).max())
+
+
+def test_the_brick_slope_search_takes_the_step_to_the_limit():
+    """The 1,021-block brick slope (tan 35 / tan 20 = 1.92380, bedding
+    daylighting, staggered cross joints): the search lands on the limit by
+    work control and the LP proves failure an eighth of the width above, so
+    the bracket is width / 8 wide and holds the closed form; the whole
+    search, gravity included, takes at most 120 factorisations (264 with
+    the bisection alone: stop 33)."""
+    system = rd.build_system(V.brick_slope(1000))
+    exact = np.tan(np.radians(35)) / np.tan(np.radians(20))
+    before = system.factorizer.count
+    fos = rd.factor_of_safety(system)
+    lo, hi = fos.bracket
+    assert fos.proof == "lp-certificate"
+    assert lo <= exact <= hi and hi - lo == pytest.approx(0.005 / 8)
+    assert fos.value == pytest.approx(exact, abs=0.005 / 16 + 1e-9)
+    assert system.factorizer.count - before <= 120
+    assert "found by work control" in fos.failed_analysis.evidence.reason
+
+
+def test_brittle_joints_keep_the_bisection(monkeypatch):
+    """Where committing the failures sheds strength (brittle cohesion), the
+    limit of a trial's strengths is not the slope's: no step to the limit
+    is taken (the bedded-slope example keeps its factor, 1.1958)."""
+    from rockdem.config import load_model
+    from rockdem.examples import example_path
+
+    model, _ = load_model(example_path("bedded-slope"))
+    system = rd.build_system(model)
+    assert system.sheds_strength
+    called = []
+    real = continuation.work_controlled
+
+    def spy(*args, **kw):
+        called.append(args)
+        return real(*args, **kw)
+
+    monkeypatch.setattr(continuation, "work_controlled", spy)
+    fos = rd.factor_of_safety(system)
+    assert called == [] and fos.value == pytest.approx(1.1958, abs=5e-4)
+
+
+def test_a_plateau_the_lp_does_not_prove_is_not_taken(monkeypatch):
+    """Where the LP does not prove failure just above the factor work
+    control found (non-associated friction: toppling), that equilibrium,
+    reached with the mechanism pushed along, is not on the trials' path: the
+    search goes on by bisection as it would without it.  Here the LP is made
+    to prove nothing near a brick slope's limit."""
+    system = rd.build_system(V.brick_slope(1000))
+    monkeypatch.setattr(continuation._LimitStep, "prove", lambda self, F: None)
+    steps, real = [], continuation._LimitStep.solve
+
+    def counted(self, F_ok, q_ok):
+        steps.append(real(self, F_ok, q_ok))
+        return steps[-1]
+
+    monkeypatch.setattr(continuation._LimitStep, "solve", counted)
+    fos = rd.factor_of_safety(system)
+    assert steps and all(found is None for found, _ in steps)
+    assert "found by work control" not in fos.failed_analysis.evidence.reason
+    exact = np.tan(np.radians(35)) / np.tan(np.radians(20))
+    assert fos.bracket[0] <= exact <= fos.bracket[1] + 1e-9
