@@ -176,3 +176,46 @@ def test_a_plateau_the_lp_does_not_prove_is_not_taken(monkeypatch):
     assert "found by work control" not in fos.failed_analysis.evidence.reason
     exact = np.tan(np.radians(35)) / np.tan(np.radians(20))
     assert fos.bracket[0] <= exact <= fos.bracket[1] + 1e-9
+
+
+def _column_with_crack_water():
+    """Literature round 4's column with water in its back crack (mean block
+    size 32.6 m with the ground: the case that found the LP's scaling)."""
+    import sys
+    from pathlib import Path
+
+    sys.path.insert(0, str(Path(__file__).parent))
+    from test_literature_round4 import _column, _critical_depth
+
+    return _column(0.8 * _critical_depth(), 40.0)
+
+
+@pytest.mark.parametrize(
+    "case", ["bedded-slope", "bolted-slope", "plane-failure-water", "toppling", "column"]
+)
+def test_an_equilibrium_is_admissible_to_the_lp(case):
+    """Any equilibrium the solver finds is a statically admissible force
+    field at its factor (METHOD.md section 4), so the LP must never prove
+    failure there.  It did on the water-filled column: the loads' moments
+    were divided by the mean block size twice, and at 32.6 m the LP read no
+    admissible field even at F = 1 (Hoek & Bray's sliding factor 1.2213).
+    Checked at F = 1 and at the lower end of each search's bracket."""
+    from rockdem.certificate import admissible_load
+    from rockdem.config import load_model
+    from rockdem.examples import example_path
+
+    if case == "column":
+        model = _column_with_crack_water()
+    else:
+        model, _ = load_model(example_path(case))
+    system = rd.build_system(model)
+    fos = rd.factor_of_safety(system)
+    standing = [fos.stable_analysis]
+    at_one = rd.analyse(system)
+    if at_one.stable:
+        standing.append(at_one)
+    for a in standing:
+        cert = admissible_load(system, a.state, a.load_factor, a.strength_factor)
+        assert not cert.proves_failure, (case, a.strength_factor, str(cert))
+    if case == "column":
+        assert fos.value == pytest.approx(1.2213, abs=5e-4)
