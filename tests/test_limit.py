@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 import rockdem as rd
-from rockdem import continuation, limit
+from rockdem import limit
 from rockdem import verification as V
 from rockdem.linalg import norm
 from rockdem.solver import residual
@@ -145,13 +145,13 @@ def test_brittle_joints_keep_the_bisection(monkeypatch):
     system = rd.build_system(model)
     assert system.sheds_strength
     called = []
-    real = continuation.work_controlled
+    real = limit.work_controlled
 
     def spy(*args, **kw):
         called.append(args)
         return real(*args, **kw)
 
-    monkeypatch.setattr(continuation, "work_controlled", spy)
+    monkeypatch.setattr(limit, "work_controlled", spy)
     fos = rd.factor_of_safety(system)
     assert called == [] and fos.value == pytest.approx(1.1958, abs=5e-4)
 
@@ -163,14 +163,14 @@ def test_a_plateau_the_lp_does_not_prove_is_not_taken(monkeypatch):
     search goes on by bisection as it would without it.  Here the LP is made
     to prove nothing near a brick slope's limit."""
     system = rd.build_system(V.brick_slope(1000))
-    monkeypatch.setattr(continuation._LimitStep, "prove", lambda self, F: None)
-    steps, real = [], continuation._LimitStep.solve
+    monkeypatch.setattr(limit.LimitStep, "prove", lambda self, F: None)
+    steps, real = [], limit.LimitStep.solve
 
     def counted(self, F_ok, q_ok):
         steps.append(real(self, F_ok, q_ok))
         return steps[-1]
 
-    monkeypatch.setattr(continuation._LimitStep, "solve", counted)
+    monkeypatch.setattr(limit.LimitStep, "solve", counted)
     fos = rd.factor_of_safety(system)
     assert steps and all(found is None for found, _ in steps)
     assert "found by work control" not in fos.failed_analysis.evidence.reason

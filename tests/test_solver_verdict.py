@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 import rockdem as rd
-from rockdem import continuation
+from rockdem import continuation, limit
 from rockdem import verification as V
 from rockdem.certificate import admissible_load
 from rockdem.config import load_model
@@ -224,7 +224,7 @@ def test_a_mechanism_only_at_the_farther_margin_widens_the_bracket_to_it(monkeyp
     and still holds the limit.  (The step to the limit by work control,
     which finds this limit, is switched off: this is about the bisection.)"""
     monkeypatch.setattr(continuation, "HOMOTOPY_ITERATIONS", 40)
-    monkeypatch.setattr(continuation, "MECHANISM_REACH", ())
+    monkeypatch.setattr(limit, "MECHANISM_REACH", ())
     model, dip, phi = _sized_family(10)
     exact = np.tan(np.radians(phi)) / np.tan(np.radians(dip))
     fos = rd.factor_of_safety(model)
@@ -598,7 +598,7 @@ def test_the_lp_bounds_a_limit_that_newton_stalls_below(monkeypatch):
     equilibrium LP, bisected between the two, bounds the limit from above
     within 0.1%: the limit lies between the equilibrium found and that
     bound, and the value (Newton's, the conservative end) is unchanged."""
-    monkeypatch.setattr(continuation, "MECHANISM_REACH", ())
+    monkeypatch.setattr(limit, "MECHANISM_REACH", ())
     model, dip, phi = _sized_family(10)
     exact = np.tan(np.radians(phi)) / np.tan(np.radians(dip))
     fos = rd.factor_of_safety(model)

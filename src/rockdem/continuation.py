@@ -14,18 +14,11 @@ for the limit: by the equilibrium LP on small models
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass, replace
+from dataclasses import replace
 
 import numpy as np
 
-from .limit import (
-    MECHANISM_REACH,
-    STALL_BELOW,
-    mechanism_slip,
-    predicted_limit,
-    pushed,
-    work_controlled,
-)
+from .limit import LimitProof, LimitStep
 from .linalg import norm
 from .relaxation import relax
 from .solver import Solve, System, newton, residual
@@ -63,27 +56,9 @@ LP_FIRST_SPRINGS = 500
 #: ... and on models of any size at this many resolutions of the search
 #: beyond the last equilibrium (the factor of safety's bracket width)
 PROOF_WIDTH = 4
-#: the equilibrium LP is tried at these shares of the search's width above
-#: the limit that work control found (the nearest first: the bracket it
-#: settles is that narrow)
-LIMIT_PROOF_SHARES = (0.125, 0.5, 1.0)
-#: the equilibrium at the limit work control found is taken this share below
-#: its factor (the plateau's factor is exact to round-off, 1 ulp above a
-#: block's tan(phi) / tan(dip); its equilibrium holds to the tolerance there)
-LIMIT_MARGIN = 1e-9
 #: the reason of an equilibrium found by dynamic relaxation that Newton could
 #: not polish (out-of-balance force within rockdem.relaxation.TOLERANCE)
 RELAXED = "converged by dynamic relaxation"
-
-
-@dataclass(frozen=True)
-class LimitProof:
-    """How the factor-of-safety search settles its bracket: ``proves(F)`` is
-    True when the equilibrium LP proves that no equilibrium exists at ``F``;
-    ``width`` is the bracket the search accepts."""
-
-    proves: Callable[[float], bool]
-    width: float
 
 
 def _release(system, state, load_factor, factor, max_it, resume=None, proven=None) -> Solve:
@@ -297,7 +272,7 @@ def _strength_homotopy(
     # keep their bisection alone
     limit = None
     if limit_proof is not None and target > F_ok and not system.sheds_strength:
-        limit = _LimitStep(system, state, lam, limit_proof)
+        limit = LimitStep(system, state, lam, limit_proof)
         if bad is not None and not last.converged:
             limit.failed(last, q_ok)  # the caller's failed attempt at the target
     while True:
@@ -388,92 +363,6 @@ def _strength_homotopy(
             last = trial
             bad = (F_try, abs(F_try - F_ok))
             step = 0.5 * (F_try - F_ok)
-
-
-class _LimitStep:
-    """The factor-of-safety search's step to the limit (rockdem.limit): once a
-    failed solve shows the mechanism, one work-controlled solve from the last
-    equilibrium; then the equilibrium LP at a little above the factor it
-    found, which settles the bracket where the LP is tight (planar sliding;
-    not toppling, where the homotopy goes on from there)."""
-
-    def __init__(self, system: System, state: SpringState, lam: float, proof: LimitProof):
-        self.system, self.state, self.lam, self.proof = system, state, lam, proof
-        self.slip: np.ndarray | None = None  # the mechanism of the last failure
-        self.done = False
-
-    @property
-    def ready(self) -> bool:
-        return self.slip is not None and not self.done
-
-    def beyond_proven(self, bad) -> bool:
-        """Does the LP prove the failure ``bad`` (factor, distance)?  The work
-        control goes only where it does: else the failure may be a stall
-        below the limit, or the LP not tight there (a near-flat benched
-        slope that stands up to F = 100: five work-controlled solves of
-        50-80 iterations for nothing)."""
-        if bad is None:
-            return False
-        proven = self.proof.proves(bad[0])
-        self.done = self.done or not proven
-        return proven
-
-    def failed(self, trial: Solve, q_from: np.ndarray) -> None:
-        """Take note of a failed solve that started from ``q_from``."""
-        slip = mechanism_slip(self.system, q_from, trial.q)
-        if slip is not None:
-            self.slip = slip
-
-    def solve(self, F_ok: float, q_ok: np.ndarray):
-        """``(limit, iterations)`` from the equilibrium at ``F_ok``: ``limit``
-        is ``(factor, q, top)``, an equilibrium at ``factor`` and the factor
-        ``top`` (at most the search's width above) where the LP proves
-        failure, or None.
-
-        Where the work lands below the plateau (the LP does not prove
-        failure just above), the mechanism is pushed further, while that
-        raises the factor.  Where the work-controlled solve stalls on a kink
-        close to the plateau (a 1,212-block slope: 2.6e-7 of the loads at
-        F = 1.46954, its exact limit), Newton at the fixed factor polishes
-        it."""
-        self.done = True
-        system, state, lam = self.system, self.state, self.lam
-        resp = residual(system, q_ok, state, lam, F_ok)[0]
-        ds = system.assembly.relative_displacement(self.slip)[1]
-        predicted = predicted_limit(resp, F_ok, ds, system.springs.weight)
-        if predicted is None or predicted <= F_ok:
-            return None, 0
-        q, factor, total = q_ok, predicted, 0
-        for reach in MECHANISM_REACH:
-            start = pushed(system, lam, q, self.slip, reach)
-            if start is None:
-                break
-            found = work_controlled(system, state, lam, start[0], factor, start[1])
-            total += found.iterations
-            near = found.converged or found.residuals[-1] <= STALL_BELOW
-            if found.factor <= max(F_ok, factor if q is not q_ok else F_ok) or not near:
-                break  # (no higher than before: a plateau where the LP is not tight)
-            # the plateau's factor is the limit to round-off: the equilibrium is
-            # taken a hair below it, checked by Newton at that fixed factor
-            at = found.factor * (1.0 - LIMIT_MARGIN)
-            polish = newton(system, state, lam, at, found.q, HOMOTOPY_ITERATIONS)
-            total += polish.iterations
-            if not polish.converged:
-                break
-            top = self.prove(at)
-            if top is not None:
-                return (at, polish.q, top), total
-            q, factor = polish.q, found.factor
-        return None, total
-
-    def prove(self, F_ok: float) -> float | None:
-        """The nearest factor above ``F_ok`` (by an eighth, a half or a whole of
-        the search's width) at which the LP proves failure, or None."""
-        for share in LIMIT_PROOF_SHARES:
-            top = F_ok + share * self.proof.width
-            if self.proof.proves(top):
-                return top
-        return None
 
 
 def _stall_check(system: System, state: SpringState, lam: float, factor: float, q0, within=None):

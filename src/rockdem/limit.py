@@ -38,12 +38,13 @@ of its failure flags): where committing the failures sheds strength
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
 
 from .linalg import norm
-from .solver import STALL_RATIO, STALL_WINDOW, System, residual, tangent
+from .solver import STALL_RATIO, STALL_WINDOW, Solve, System, newton, residual, tangent
 from .spring_law import Response, SpringState, strength
 
 #: Newton iterations of one work-controlled solve (a 1,212-block slope
@@ -60,6 +61,16 @@ MECHANISM_REACH = (1.0, 4.0)
 BETA_START = 1e-6
 BETA_MAX = 0.1
 LINE_SEARCH_HALVINGS = 10
+#: Newton iterations of the polish at a fixed factor
+POLISH_ITERATIONS = 25
+#: the equilibrium LP is tried at these shares of the search's width above
+#: the limit that work control found (the nearest first: the bracket it
+#: settles is that narrow)
+LIMIT_PROOF_SHARES = (0.125, 0.5, 1.0)
+#: the equilibrium at the limit work control found is taken this share below
+#: its factor (the plateau's factor is exact to round-off, 1 ulp above a
+#: block's tan(phi) / tan(dip); its equilibrium holds to the tolerance there)
+LIMIT_MARGIN = 1e-9
 #: the solve stops where it stalls this close to equilibrium (share of the
 #: loads), as rockdem.solver.newton does at a kink of the spring law; the
 #: caller polishes at a fixed factor (from 2.6e-7: Newton within 1e-7 in 10
@@ -210,3 +221,99 @@ def pushed(system: System, load_factor: float, q: np.ndarray, slip_q: np.ndarray
     start = q + (reach * system.elastic_scale * load_factor / size) * slip_q
     work = float(load_factor * (system.f_ext @ start))
     return (start, work) if work > 0.0 else None
+
+
+@dataclass(frozen=True)
+class LimitProof:
+    """How the factor-of-safety search settles its bracket: ``proves(F)`` is
+    True when the equilibrium LP proves that no equilibrium exists at ``F``;
+    ``width`` is the bracket the search accepts."""
+
+    proves: Callable[[float], bool]
+    width: float
+
+
+class LimitStep:
+    """The factor-of-safety search's step to the limit: once a
+    failed solve shows the mechanism, one work-controlled solve from the last
+    equilibrium; then the equilibrium LP at a little above the factor it
+    found, which settles the bracket where the LP is tight (planar sliding;
+    not toppling, where the homotopy goes on from there)."""
+
+    def __init__(self, system: System, state: SpringState, lam: float, proof: LimitProof):
+        self.system, self.state, self.lam, self.proof = system, state, lam, proof
+        self.slip: np.ndarray | None = None  # the mechanism of the last failure
+        self.done = False
+
+    @property
+    def ready(self) -> bool:
+        return self.slip is not None and not self.done
+
+    def beyond_proven(self, bad) -> bool:
+        """Does the LP prove the failure ``bad`` (factor, distance)?  The work
+        control goes only where it does: else the failure may be a stall
+        below the limit, or the LP not tight there (a near-flat benched
+        slope that stands up to F = 100: five work-controlled solves of
+        50-80 iterations for nothing)."""
+        if bad is None:
+            return False
+        proven = self.proof.proves(bad[0])
+        self.done = self.done or not proven
+        return proven
+
+    def failed(self, trial: Solve, q_from: np.ndarray) -> None:
+        """Take note of a failed solve that started from ``q_from``."""
+        slip = mechanism_slip(self.system, q_from, trial.q)
+        if slip is not None:
+            self.slip = slip
+
+    def solve(self, F_ok: float, q_ok: np.ndarray):
+        """``(limit, iterations)`` from the equilibrium at ``F_ok``: ``limit``
+        is ``(factor, q, top)``, an equilibrium at ``factor`` and the factor
+        ``top`` (at most the search's width above) where the LP proves
+        failure, or None.
+
+        Where the work lands below the plateau (the LP does not prove
+        failure just above), the mechanism is pushed further, while that
+        raises the factor.  Where the work-controlled solve stalls on a kink
+        close to the plateau (a 1,212-block slope: 2.6e-7 of the loads at
+        F = 1.46954, its exact limit), Newton at the fixed factor polishes
+        it."""
+        self.done = True
+        system, state, lam = self.system, self.state, self.lam
+        resp = residual(system, q_ok, state, lam, F_ok)[0]
+        ds = system.assembly.relative_displacement(self.slip)[1]
+        predicted = predicted_limit(resp, F_ok, ds, system.springs.weight)
+        if predicted is None or predicted <= F_ok:
+            return None, 0
+        q, factor, total = q_ok, predicted, 0
+        for reach in MECHANISM_REACH:
+            start = pushed(system, lam, q, self.slip, reach)
+            if start is None:
+                break
+            found = work_controlled(system, state, lam, start[0], factor, start[1])
+            total += found.iterations
+            near = found.converged or found.residuals[-1] <= STALL_BELOW
+            if found.factor <= max(F_ok, factor if q is not q_ok else F_ok) or not near:
+                break  # (no higher than before: a plateau where the LP is not tight)
+            # the plateau's factor is the limit to round-off: the equilibrium is
+            # taken a hair below it, checked by Newton at that fixed factor
+            at = found.factor * (1.0 - LIMIT_MARGIN)
+            polish = newton(system, state, lam, at, found.q, POLISH_ITERATIONS)
+            total += polish.iterations
+            if not polish.converged:
+                break
+            top = self.prove(at)
+            if top is not None:
+                return (at, polish.q, top), total
+            q, factor = polish.q, found.factor
+        return None, total
+
+    def prove(self, F_ok: float) -> float | None:
+        """The nearest factor above ``F_ok`` (by an eighth, a half or a whole of
+        the search's width) at which the LP proves failure, or None."""
+        for share in LIMIT_PROOF_SHARES:
+            top = F_ok + share * self.proof.width
+            if self.proof.proves(top):
+                return top
+        return None
