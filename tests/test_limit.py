@@ -118,8 +118,8 @@ def test_the_strength_derivative_is_that_of_the_internal_force():
 def test_the_brick_slope_search_takes_the_step_to_the_limit():
     """The 1,021-block brick slope (tan 35 / tan 20 = 1.92380, bedding
     daylighting, staggered cross joints): the search lands on the limit by
-    work control and the LP proves failure an eighth of the width above, so
-    the bracket is width / 8 wide and holds the closed form; the whole
+    work control and the LP proves failure a 64th of the width above, so
+    the bracket is width / 64 wide and holds the closed form; the whole
     search, gravity included, takes at most 120 factorisations (264 with
     the bisection alone: stop 33)."""
     system = rd.build_system(V.brick_slope(1000))
@@ -128,8 +128,8 @@ def test_the_brick_slope_search_takes_the_step_to_the_limit():
     fos = rd.factor_of_safety(system)
     lo, hi = fos.bracket
     assert fos.proof == "lp-certificate"
-    assert lo <= exact <= hi and hi - lo == pytest.approx(0.005 / 8)
-    assert fos.value == pytest.approx(exact, abs=0.005 / 16 + 1e-9)
+    assert lo <= exact <= hi and hi - lo == pytest.approx(0.005 / 64)
+    assert fos.value == pytest.approx(exact, abs=0.005 / 128 + 1e-9)
     assert system.factorizer.count - before <= 120
     assert "found by work control" in fos.failed_analysis.evidence.reason
 

@@ -199,11 +199,12 @@ def test_generated_slopes_of_200_to_3000_blocks_match_planar_sliding(i):
     """With the eight above, twenty geometries (issue 9): c = 0 bedding
     daylighting in a steeper face, cross joints that cannot topple, 222 to
     2,901 blocks: FS = tan(phi)/tan(dip) within 0.1% (Hoek & Bray planar
-    sliding), every one proven by the LP.  Measured: +0.02 .. +0.03% (the
-    bracket is [limit, limit + width / 8]).  Before the search reached the
-    limit by work control the tolerance was 1%, measured -0.60% .. +0.02%
-    with one confirmed only by relaxation: the 2,322-block model's top was a
-    Newton stall 0.6% below the limit."""
+    sliding), every one proven by the LP.  Measured: +0.02 .. +0.03% with
+    the bracket [limit, limit + width / 8]; it is [limit, limit + width /
+    64] now.  Before the search reached the limit by work control the
+    tolerance was 1%, measured -0.60% .. +0.02% with one confirmed only by
+    relaxation: the 2,322-block model's top was a Newton stall 0.6% below
+    the limit."""
     model, dip, phi = _sized_family(i)
     n = int((~model.blocks.fixed).sum())
     assert 0.9 * 200.0 * 15.0 ** (i / 11) < n < 1.15 * 200.0 * 15.0 ** (i / 11)
@@ -500,13 +501,18 @@ def test_a_search_below_an_unstable_gravity_state_starts_where_it_stopped(monkey
     reached equilibrium up to a strength factor just below that.  The factor
     of safety then analyses the slope at that factor: from that equilibrium,
     not from scratch (a 1,021-block slope: 721 -> 448 factorisations, the
-    same factor of safety), and tries first where that search lost
-    equilibrium (448 -> 356)."""
+    same factor of safety).  The failed search climbs to its limit by work
+    control and the LP proves failure a 64th of the width (relative, below
+    F = 1) above it (1,021 blocks: 358 -> 127 factorisations), so that trial settles the
+    bracket: no trial where that search lost equilibrium is needed."""
     from rockdem import continuation
 
     system = rd.build_system(V.brick_slope(100, friction_angle=15))
-    first = rd.analyse(system, prove_first=False)  # as the search runs it
+    first = rd.analyse(system, prove_first=False, limit_width=0.005)  # as the search runs it
     assert not first.stable
+    assert "found by work control" in first.evidence.reason
+    reached = first.evidence.reached  # (below F = 1 the width is relative to F)
+    assert first.evidence.failed_at - reached == pytest.approx(reached * 0.005 / 64)
     lam, reached, q = first.unloaded_limit
     assert lam == first.steps[0].load_factor and reached == first.evidence.reached
     assert reached < 1.0 and q.shape == (system.assembly.n_dof,)
@@ -522,7 +528,9 @@ def test_a_search_below_an_unstable_gravity_state_starts_where_it_stopped(monkey
     monkeypatch.setattr(continuation, "_release", release)
     fos = rd.factor_of_safety(system)
     assert reached not in released and 1.0 in released
-    assert [t.factor for t in fos.trials[:3]] == [1.0, reached, first.evidence.failed_at]
+    assert [t.factor for t in fos.trials] == [1.0, reached]
+    assert fos.bracket == (reached, first.evidence.failed_at)
+    assert fos.proof == "lp-certificate"
     assert fos.value == pytest.approx(np.tan(np.radians(15)) / np.tan(np.radians(20)), rel=0.01)
 
 
@@ -638,9 +646,9 @@ def test_work_control_reaches_the_limit_that_newton_stalls_below():
     """The same 2,322-block slope as searched: the strength factor becomes
     an unknown and the external work is prescribed (rockdem.limit), so the
     search lands on the limit's plateau instead of stalling below it; the
-    LP proves failure an eighth of the width above.  Hoek & Bray's planar
+    LP proves failure a 64th of the width above.  Hoek & Bray's planar
     sliding, tan(phi) / tan(dip) = 1.4866, lies in the bracket, which is
-    width / 8 wide, and the equilibrium at its lower end is within 1e-6
+    width / 64 wide, and the equilibrium at its lower end is within 1e-6
     of it (it was 0.6% low, confirmed only by dynamic relaxation)."""
     model, dip, phi = _sized_family(10)
     exact = np.tan(np.radians(phi)) / np.tan(np.radians(dip))
@@ -648,6 +656,6 @@ def test_work_control_reaches_the_limit_that_newton_stalls_below():
     lo, hi = fos.bracket
     assert fos.proof == "lp-certificate"
     assert lo <= exact <= hi
-    assert hi - lo == pytest.approx(0.005 / 8)
+    assert hi - lo == pytest.approx(0.005 / 64)
     assert lo == pytest.approx(exact, rel=1e-6)
     assert "found by work control" in fos.failed_analysis.evidence.reason

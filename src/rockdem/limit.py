@@ -65,8 +65,8 @@ LINE_SEARCH_HALVINGS = 10
 POLISH_ITERATIONS = 25
 #: the equilibrium LP is tried at these shares of the search's width above
 #: the limit that work control found (the nearest first: the bracket it
-#: settles is that narrow)
-LIMIT_PROOF_SHARES = (0.125, 0.5, 1.0)
+#: settles is that narrow; at an eighth the wedge's 0.9786 read 0.9789)
+LIMIT_PROOF_SHARES = (1 / 64, 1 / 8, 1 / 2, 1.0)
 #: the equilibrium at the limit work control found is taken this share below
 #: its factor (the plateau's factor is exact to round-off, 1 ulp above a
 #: block's tan(phi) / tan(dip); its equilibrium holds to the tolerance there)
@@ -310,10 +310,13 @@ class LimitStep:
         return None, total
 
     def prove(self, F_ok: float) -> float | None:
-        """The nearest factor above ``F_ok`` (by an eighth, a half or a whole of
-        the search's width) at which the LP proves failure, or None."""
+        """The nearest factor above ``F_ok`` (by a share of the search's width,
+        ``LIMIT_PROOF_SHARES``) at which the LP proves failure, or None.  Below
+        F = 1 the width is taken relative to F (a block at phi 1 on a 20
+        degree plane, FS 0.048: an eighth of the absolute 0.005 is 1.3%)."""
+        width = self.proof.width * min(1.0, F_ok)
         for share in LIMIT_PROOF_SHARES:
-            top = F_ok + share * self.proof.width
+            top = F_ok + share * width
             if self.proof.proves(top):
                 return top
         return None

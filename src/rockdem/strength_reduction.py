@@ -145,7 +145,9 @@ def factor_of_safety(
     # that stands; found by hostile testing)
     late = system.bolts is not None and bool(np.any(system.bolts.late))
     F = 1.0 if late and smallest < 1.0 < largest else start
-    first = analyse(system, strength_factor=F, prove_first=False, show_mechanism=False)
+    first = analyse(
+        system, strength_factor=F, prove_first=False, show_mechanism=False, limit_width=width
+    )
     record(F, first)
     # bolts to go in after the loads never go into a slope that does not
     # stand under them: the search goes on without them (at a smaller factor
@@ -213,6 +215,16 @@ def factor_of_safety(
     hi_F = hi_an.strength_factor if hi_an is not None else np.inf
     # where the failed analysis's own search lost equilibrium: the first trial
     hint = hi_an.evidence.failed_at if hi_an is not None else None
+    if (
+        hi_an is not None
+        and hint is not None
+        and lo_an.strength_factor < hint <= lo_an.strength_factor + width
+    ):
+        # the failed analysis climbed to its limit (by work control) and this
+        # trial stands there: the LP at that limit's top may settle the bracket
+        proved, more = prove_failed_trial(system, hi_an, lo_an.state, hint, trials)
+        if proved.evidence.certified:
+            hi_an, trials, hi_F, hint = proved, more, hint, None
     if hi_an is not None and hi_an.evidence.proof != "lp-certificate":
         # a staged analysis that stalled without proof bounds nothing: the
         # continuation from the stable state decides (and may pass it)
