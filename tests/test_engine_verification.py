@@ -24,12 +24,15 @@ def joint(phi, c=0.0, **kw):
     "dip,phi", [(20, 30), (30, 35), (35, 35.4), (10, 40), (40, 45), (25, 24.6)]
 )
 def test_block_on_plane_factor_of_safety(dip, phi):
-    """FS = tan(phi) / tan(dip) within 0.5% (one pair within 0.5 degree of the limit)."""
+    """FS = tan(phi) / tan(dip) within 0.5% (one pair within 0.5 degree of the
+    limit).  The stable end is an equilibrium to the solver's tolerance (1e-8
+    of the loads): where work control finds the limit it lies within that
+    share of the exact value (25 / 24.6: 1.3e-9 above it)."""
     fos = rd.factor_of_safety(V.block_on_plane(dip, joint(phi)))
     assert fos.mode == "strength"
     assert fos.value == pytest.approx(TAN(phi) / TAN(dip), rel=0.005)
     lo, hi = fos.bracket
-    assert lo <= TAN(phi) / TAN(dip) <= hi + 1e-9
+    assert lo * (1 - 1e-8) <= TAN(phi) / TAN(dip) <= hi + 1e-9
     assert hi - lo <= 0.005
 
 

@@ -504,7 +504,7 @@ def test_a_search_below_an_unstable_gravity_state_starts_where_it_stopped(monkey
     same factor of safety).  The failed search climbs to its limit by work
     control and the LP proves failure a 64th of the width (relative, below
     F = 1) above it (1,021 blocks: 358 -> 127 factorisations), so that trial settles the
-    bracket: no trial where that search lost equilibrium is needed."""
+    bracket; the trial there shows the mechanism at the limit."""
     from rockdem import continuation
 
     system = rd.build_system(V.brick_slope(100, friction_angle=15))
@@ -528,7 +528,7 @@ def test_a_search_below_an_unstable_gravity_state_starts_where_it_stopped(monkey
     monkeypatch.setattr(continuation, "_release", release)
     fos = rd.factor_of_safety(system)
     assert reached not in released and 1.0 in released
-    assert [t.factor for t in fos.trials] == [1.0, reached]
+    assert [t.factor for t in fos.trials] == [1.0, reached, first.evidence.failed_at]
     assert fos.bracket == (reached, first.evidence.failed_at)
     assert fos.proof == "lp-certificate"
     assert fos.value == pytest.approx(np.tan(np.radians(15)) / np.tan(np.radians(20)), rel=0.01)

@@ -68,8 +68,12 @@ POLISH_ITERATIONS = 25
 #: settles is that narrow; at an eighth the wedge's 0.9786 read 0.9789)
 LIMIT_PROOF_SHARES = (1 / 64, 1 / 8, 1 / 2, 1.0)
 #: the equilibrium at the limit work control found is taken this share below
-#: its factor (the plateau's factor is exact to round-off, 1 ulp above a
-#: block's tan(phi) / tan(dip); its equilibrium holds to the tolerance there)
+#: its factor (the plateau's factor is exact to about round-off: a block at
+#: phi 24.6 on a 25 degree plane 2.5e-9 above tan(phi) / tan(dip), so the
+#: stable end is an equilibrium to the tolerance, 1.3e-9 above the limit).
+#: Not more: below the plateau the sliding springs must find their elastic
+#: displacements again, which the polish cannot (one tolerance, 1e-8: it
+#: stalled on that kink at 1e-7, and the next trial from there failed)
 LIMIT_MARGIN = 1e-9
 #: the solve stops where it stalls this close to equilibrium (share of the
 #: loads), as rockdem.solver.newton does at a kink of the spring law; the

@@ -25,13 +25,13 @@ from .analysis import (
     show_mechanism,
 )
 from .certificate import certificate_for, prove_failed_trial, upper_bound
-from .continuation import LimitProof
+from .continuation import HOMOTOPY_ITERATIONS, LimitProof
 from .errors import InputError, check_number
 from .mechanism import relaxation_mechanism
 from .model import Model
 from .relaxation import CONFIRM_MARGINS, confirm_failed_trial, with_relaxation
 from .results import Analysis, FactorOfSafety, Step, Trial
-from .solver import System, build_system
+from .solver import Solve, System, build_system, newton
 
 #: times a factor-of-safety search goes on past a limit that dynamic
 #: relaxation did not confirm (equilibrium beyond it: a stall of Newton's
@@ -222,9 +222,16 @@ def factor_of_safety(
     ):
         # the failed analysis climbed to its limit (by work control) and this
         # trial stands there: the LP at that limit's top may settle the bracket
-        proved, more = prove_failed_trial(system, hi_an, lo_an.state, hint, trials)
-        if proved.evidence.certified:
-            hi_an, trials, hi_F, hint = proved, more, hint, None
+        proved, _ = prove_failed_trial(system, hi_an, lo_an.state, hint, trials)
+        top = (
+            _failed_at_top(system, lo_an, hint, proved.evidence.reason)
+            if proved.evidence.certified
+            else None
+        )
+        if top is not None:  # the failed state shown: just above the limit, not at the start
+            record(hint, top)
+            hi_an, trials = prove_failed_trial(system, top, lo_an.state, hint, trials)
+            hi_F, hint = hint, None
     if hi_an is not None and hi_an.evidence.proof != "lp-certificate":
         # a staged analysis that stalled without proof bounds nothing: the
         # continuation from the stable state decides (and may pass it)
@@ -362,6 +369,26 @@ def _shown(system: System, failed: Analysis, trials: list[Trial]):
     ]
 
 
+def _failed_at_top(system: System, lo_an: Analysis, top: float, reason: str):
+    """The failed trial at ``top``, where the LP proves failure just above the
+    limit ``lo_an`` stands at: one Newton solve from that equilibrium, whose
+    failure shows the mechanism at the limit (the failed analysis at the
+    start factor shows a larger one); None if it converges."""
+    asm = system.assembly
+    free = ~system.blocks.fixed
+    q_lo = np.zeros(asm.n_dof)
+    q_lo[asm.dof[free].ravel()] = lo_an.displacement[free].ravel()
+    start = lo_an.state.without_slip()
+    tried = newton(system, start, lo_an.load_factor, top, q_lo, HOMOTOPY_ITERATIONS)
+    if tried.converged:
+        return None
+    tried = replace(
+        tried, reason=reason, reached=lo_an.strength_factor, reached_q=q_lo, failed_at=top
+    )
+    stage = max(step.stage for step in lo_an.steps) + 1
+    return _continue(system, lo_an, top, stage, first=tried)[0]
+
+
 def _continue(
     system: System,
     base: Analysis,
@@ -371,13 +398,15 @@ def _continue(
     resolution=None,
     base_factor: float | None = None,
     width: float | None = None,
+    first: Solve | None = None,
 ):
     """One strength trial from the converged state of ``base``: (Analysis, Solve).
 
     ``q0`` (default: the displacements of ``base``) is in equilibrium at
     ``base_factor`` (default: ``base``'s factor).  ``width``: the bracket
     the search accepts; the trial stops where the equilibrium LP proves
-    failure within it of an equilibrium (see :class:`LimitProof`)."""
+    failure within it of an equilibrium (see :class:`LimitProof`).
+    ``first``: the trial's solve, when it was made another way."""
     asm = system.assembly
     free = ~system.blocks.fixed
     q_base = np.zeros(asm.n_dof)
@@ -394,7 +423,17 @@ def _continue(
 
         limit_proof = LimitProof(proves, width)
     sol, state = _settle(
-        system, start, q0, lam, factor, stage, at, True, resolution, limit_proof=limit_proof
+        system,
+        start,
+        q0,
+        lam,
+        factor,
+        stage,
+        at,
+        True,
+        resolution,
+        first=first,
+        limit_proof=limit_proof,
     )
     ev = _evidence(sol)
     n_failed = int((state.yielded | state.broken).sum())
