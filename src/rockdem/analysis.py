@@ -17,10 +17,9 @@ from dataclasses import replace
 
 import numpy as np
 
-from .certificate import certificate_for, prove_in_region, with_certificate
+from .certificate import certificate_for, lp_limit_proof, prove_in_region, with_certificate
 from .continuation import RELAXED, solve_equilibrium
 from .errors import ModelWarning, check_number
-from .limit import LimitProof
 from .linalg import norm
 from .mechanism import held_blocks, newton_mechanism, relaxation_mechanism, slip_surface
 from .model import MAX_LOAD_STEPS, Model, check_count
@@ -193,11 +192,7 @@ def _load_step(
             base, q0 = start[1], start[2]
         limit_proof = None
         if width is not None and lam_prev == 0.0 and target == lam:
-
-            def proves(F: float, at=target, unloaded=state) -> bool:
-                return certificate_for(system, unloaded, at, F, quick=True).proves_failure
-
-            limit_proof = LimitProof(proves, width)
+            limit_proof = lp_limit_proof(system, state, target, width)
         sol, new_state = _settle(
             system,
             state,

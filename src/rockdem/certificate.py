@@ -24,6 +24,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 import scipy.sparse as sp
 
+from .limit import LimitProof
 from .spring_law import SpringState, strength
 
 #: the LP stops at this multiple of the load (the answer "at least this")
@@ -306,6 +307,16 @@ def certificate_for(system, state, load_factor, factor, region=None, quick=False
     if known is None or cert.proves_failure or cert.mu is not None:
         system.certificates[key] = cert
     return cert
+
+
+def lp_limit_proof(system, state, load_factor: float, width: float) -> LimitProof:
+    """The factor-of-safety search's proof of a limit (rockdem.limit): the
+    quick equilibrium LP at the strengths of ``state``."""
+
+    def proves(factor: float) -> bool:
+        return certificate_for(system, state, load_factor, factor, quick=True).proves_failure
+
+    return LimitProof(proves, width)
 
 
 def _cache_key(system, state, load_factor, factor, region):

@@ -454,9 +454,7 @@ def confirm_failed_trial(system, failed, base, factor: float, trials):
     well: undecided there and a mechanism farther on does not confirm the
     bracket (the caller may go on from it)."""
     asm = system.assembly
-    free = ~system.blocks.fixed
-    q0 = np.zeros(asm.n_dof)
-    q0[asm.dof[free].ravel()] = base.displacement[free].ravel()
+    q0 = base.q
     state = base.state.without_slip()
     look = not failed.evidence.certified  # proven: the run only shows the mechanism
     if not look and not shows_mechanism(asm.n_dof):

@@ -249,16 +249,23 @@ class Analysis:
         return self.system.blocks.ids[self.unstable]
 
     @property
+    def q(self) -> np.ndarray:
+        """``displacement`` as the solver's vector over the free blocks' dof."""
+        asm, free = self.system.assembly, ~self.system.blocks.fixed
+        q = np.zeros(asm.n_dof)
+        q[asm.dof[free].ravel()] = self.displacement[free].ravel()
+        return q
+
+    @property
     def bolts(self) -> BoltResults | None:
         """Force in every bolt at every joint it crosses, at ``displacement``
         (None without bolts)."""
         system = self.system
         if system.bolts is None:
             return None
-        asm, free = system.assembly, ~system.blocks.fixed
-        q = np.zeros(asm.n_dof)
-        q[asm.dof[free].ravel()] = self.displacement[free].ravel()
-        return bolt_results(system.bolts, q, self.state.bolt_first_yield, self.state.bolt_reference)
+        return bolt_results(
+            system.bolts, self.q, self.state.bolt_first_yield, self.state.bolt_reference
+        )
 
     @property
     def failed_interfaces(self) -> np.ndarray:

@@ -24,8 +24,8 @@ from .analysis import (
     analyse,
     show_mechanism,
 )
-from .certificate import certificate_for, prove_failed_trial, upper_bound
-from .continuation import HOMOTOPY_ITERATIONS, LimitProof
+from .certificate import lp_limit_proof, prove_failed_trial, upper_bound
+from .continuation import HOMOTOPY_ITERATIONS
 from .errors import InputError, check_number
 from .mechanism import relaxation_mechanism
 from .model import Model
@@ -374,10 +374,7 @@ def _failed_at_top(system: System, lo_an: Analysis, top: float, reason: str):
     limit ``lo_an`` stands at: one Newton solve from that equilibrium, whose
     failure shows the mechanism at the limit (the failed analysis at the
     start factor shows a larger one); None if it converges."""
-    asm = system.assembly
-    free = ~system.blocks.fixed
-    q_lo = np.zeros(asm.n_dof)
-    q_lo[asm.dof[free].ravel()] = lo_an.displacement[free].ravel()
+    q_lo = lo_an.q
     start = lo_an.state.without_slip()
     tried = newton(system, start, lo_an.load_factor, top, q_lo, HOMOTOPY_ITERATIONS)
     if tried.converged:
@@ -407,21 +404,12 @@ def _continue(
     the search accepts; the trial stops where the equilibrium LP proves
     failure within it of an equilibrium (see :class:`LimitProof`).
     ``first``: the trial's solve, when it was made another way."""
-    asm = system.assembly
-    free = ~system.blocks.fixed
-    q_base = np.zeros(asm.n_dof)
-    q_base[asm.dof[free].ravel()] = base.displacement[free].ravel()
+    q_base = base.q
     q0 = q_base if q0 is None else q0
     lam = base.load_factor
     start = base.state.without_slip()
     at = base.strength_factor if base_factor is None else base_factor
-    limit_proof = None
-    if width is not None:
-
-        def proves(F: float) -> bool:
-            return certificate_for(system, start, lam, F, quick=True).proves_failure
-
-        limit_proof = LimitProof(proves, width)
+    limit_proof = None if width is None else lp_limit_proof(system, start, lam, width)
     sol, state = _settle(
         system,
         start,
