@@ -134,6 +134,36 @@ def test_the_brick_slope_search_takes_the_step_to_the_limit():
     assert "found by work control" in fos.failed_analysis.evidence.reason
 
 
+def test_a_model_too_large_for_the_whole_lp_is_proven_on_its_moving_blocks(monkeypatch):
+    """Above CERTIFY_MAX_SPRINGS the whole-model LP is not solved (a
+    94,533-block slope: 19-21 s and 1.5 GB each); the step to the limit is
+    proven by the LP of the mechanism's blocks alone, a relaxation of the
+    whole LP.  Here the 1,021-block brick slope (tan 35 / tan 20) is made
+    "too large": the search takes the same step to the limit, the bracket is
+    as narrow and holds the closed form, and no whole-model LP is solved.
+    (Before, such models bisected: 264 factorisations at this size.)"""
+    from rockdem import certificate
+
+    system = rd.build_system(V.brick_slope(1000))
+    monkeypatch.setattr(certificate, "CERTIFY_MAX_SPRINGS", system.springs.n_springs - 1)
+    regions, real = [], certificate.admissible_load
+
+    def spy(system, state, load_factor, factor, region=None, quick=False):
+        regions.append(region)
+        return real(system, state, load_factor, factor, region, quick)
+
+    monkeypatch.setattr(certificate, "admissible_load", spy)
+    exact = np.tan(np.radians(35)) / np.tan(np.radians(20))
+    fos = rd.factor_of_safety(system)
+    lo, hi = fos.bracket
+    assert fos.proof == "lp-certificate"
+    assert lo <= exact <= hi and hi - lo == pytest.approx(0.005 / 64)
+    assert system.factorizer.count <= 120
+    assert regions and all(r is not None and 0 < r.sum() < r.size for r in regions)
+    assert "found by work control" in fos.failed_analysis.evidence.reason
+    assert "moving blocks" in fos.failed_analysis.evidence.certificate
+
+
 def test_brittle_joints_keep_the_bisection(monkeypatch):
     """Where committing the failures sheds strength (brittle cohesion), the
     limit of a trial's strengths is not the slope's: no step to the limit

@@ -44,6 +44,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .linalg import norm
+from .mechanism import MECHANISM_SHARE, block_motion
 from .solver import STALL_RATIO, STALL_WINDOW, Solve, System, newton, residual, tangent
 from .spring_law import Response, SpringState, strength
 
@@ -229,11 +230,13 @@ def pushed(system: System, load_factor: float, q: np.ndarray, slip_q: np.ndarray
 
 @dataclass(frozen=True)
 class LimitProof:
-    """How the factor-of-safety search settles its bracket: ``proves(F)`` is
-    True when the equilibrium LP proves that no equilibrium exists at ``F``;
-    ``width`` is the bracket the search accepts."""
+    """How the factor-of-safety search settles its bracket: ``proves(F,
+    moving)`` is True when the equilibrium LP proves that no equilibrium
+    exists at ``F`` (``moving``: the blocks of the mechanism, bool per block,
+    whose equations alone may prove it on models too large for the whole
+    LP); ``width`` is the bracket the search accepts."""
 
-    proves: Callable[[float], bool]
+    proves: Callable[[float, np.ndarray | None], bool]
     width: float
 
 
@@ -247,6 +250,7 @@ class LimitStep:
     def __init__(self, system: System, state: SpringState, lam: float, proof: LimitProof):
         self.system, self.state, self.lam, self.proof = system, state, lam, proof
         self.slip: np.ndarray | None = None  # the mechanism of the last failure
+        self.moving: np.ndarray | None = None  # ... and its blocks (bool per block)
         self.done = False
 
     @property
@@ -261,7 +265,7 @@ class LimitStep:
         50-80 iterations for nothing)."""
         if bad is None:
             return False
-        proven = self.proof.proves(bad[0])
+        proven = self.proof.proves(bad[0], self.moving)
         self.done = self.done or not proven
         return proven
 
@@ -270,6 +274,8 @@ class LimitStep:
         slip = mechanism_slip(self.system, q_from, trial.q)
         if slip is not None:
             self.slip = slip
+            motion = block_motion(self.system, slip)[1]
+            self.moving = motion > MECHANISM_SHARE * motion.max()
 
     def solve(self, F_ok: float, q_ok: np.ndarray):
         """``(limit, iterations)`` from the equilibrium at ``F_ok``: ``limit``
@@ -321,6 +327,6 @@ class LimitStep:
         width = self.proof.width * min(1.0, F_ok)
         for share in LIMIT_PROOF_SHARES:
             top = F_ok + share * width
-            if self.proof.proves(top):
+            if self.proof.proves(top, self.moving):
                 return top
         return None
