@@ -292,7 +292,7 @@ class _Tangents:
         return self.lu
 
 
-def newton(system, state, load_factor, factor, q, max_it):
+def newton(system, state, load_factor, factor, q, max_it, tolerance=None):
     """Semismooth Newton with an adaptive Levenberg-Marquardt shift and a
     backtracking line search on the scaled out-of-balance force.
 
@@ -304,7 +304,8 @@ def newton(system, state, load_factor, factor, q, max_it):
     A step that would move a dof farther than ``TRUST_RADIUS`` x the larger
     of the elastic displacement and the distance travelled since the start
     is re-solved with ``beta`` scaled up by the excess (the free mode's step
-    is ~ 1 / beta).
+    is ~ 1 / beta).  ``tolerance``: the out-of-balance share of the loads
+    at which it stops (default: the model's).
 
     Near a kink the backtracking creeps: the tangent does not change, aims at
     the same point, and each step halves the way to the kink.  Measured and
@@ -318,7 +319,7 @@ def newton(system, state, load_factor, factor, q, max_it):
     """
     asm = system.assembly
     scale = asm.dof_scale
-    tol = system.model.settings.tolerance
+    tol = system.model.settings.tolerance if tolerance is None else tolerance
     f_norm = norm(load_factor * system.f_ext * scale)
     # the strengths of this state and factor, for every residual of the solve
     strengths = strength(system.springs, state, factor, system.model.settings.reduce_tensile)
