@@ -257,7 +257,7 @@ def test_an_undecided_confirmation_goes_on_while_the_budget_allows(monkeypatch):
     a mechanism)."""
     from dataclasses import replace
 
-    from rockdem import relaxation
+    from rockdem import confirmation
     from rockdem.results import Trial
 
     dip, phi = 20, 30
@@ -265,7 +265,7 @@ def test_an_undecided_confirmation_goes_on_while_the_budget_allows(monkeypatch):
     system = rd.build_system(model)
     fs = V.sliding_fos(dip, phi)
     base = rd.analyse(system, strength_factor=0.9 * fs)
-    starts, real = [], relaxation.relax
+    starts, real = [], confirmation.relax
 
     def relax_(system_, state, lam, factor, q0, **kw):
         if kw.get("keep_slip"):  # (the second look of a run that moved: not counted)
@@ -280,9 +280,9 @@ def test_an_undecided_confirmation_goes_on_while_the_budget_allows(monkeypatch):
     last = failed.steps[-1]
     unproven = replace(last, evidence=replace(last.evidence, certified=False))
     failed = replace(failed, steps=(*failed.steps[:-1], unproven))
-    monkeypatch.setattr(relaxation, "relax", relax_)
+    monkeypatch.setattr(confirmation, "relax", relax_)
     trials = [Trial(1.1 * fs, False, failed.evidence)]
-    _, _, run, beyond, _ = relaxation.confirm_failed_trial(system, failed, base, fs, trials)
+    _, _, run, beyond, _ = confirmation.confirm_failed_trial(system, failed, base, fs, trials)
     assert run.status == "mechanism"
     assert len(starts) == 4  # the two margins, then two runs on from the last
     assert not np.array_equal(starts[3], starts[2])  # it went on from where it stopped
@@ -298,7 +298,7 @@ def test_a_proven_failure_is_shown_by_the_margins_runs_alone(monkeypatch):
     sliding factor (Hoek & Bray 1981)."""
     from dataclasses import replace
 
-    from rockdem import relaxation
+    from rockdem import confirmation
     from rockdem.results import Trial
 
     dip, phi = 20, 30
@@ -308,20 +308,20 @@ def test_a_proven_failure_is_shown_by_the_margins_runs_alone(monkeypatch):
     base = rd.analyse(system, strength_factor=0.9 * fs)
     failed = rd.analyse(system, strength_factor=1.1 * fs)
     assert failed.evidence.certified
-    runs, real = [], relaxation.relax
+    runs, real = [], confirmation.relax
 
     def relax_(system_, state, lam, factor, q0, **kw):
         runs.append(factor)
         return replace(real(system_, state, lam, factor, q0, **kw), status="undecided")
 
-    monkeypatch.setattr(relaxation, "relax", relax_)
+    monkeypatch.setattr(confirmation, "relax", relax_)
     trials = [Trial(1.1 * fs, False, failed.evidence)]
-    shown, _, run, _, _ = relaxation.confirm_failed_trial(system, failed, base, fs, trials)
+    shown, _, run, _, _ = confirmation.confirm_failed_trial(system, failed, base, fs, trials)
     assert runs == pytest.approx([fs * 1.02, fs * 1.05])  # the two margins, no more
     assert shown.evidence.proof == "lp-certificate"
-    monkeypatch.setattr(relaxation, "shows_mechanism", lambda n_dof: False)
+    monkeypatch.setattr(confirmation, "shows_mechanism", lambda n_dof: False)
     runs.clear()
-    shown, _, run, _, _ = relaxation.confirm_failed_trial(system, failed, base, fs, trials)
+    shown, _, run, _, _ = confirmation.confirm_failed_trial(system, failed, base, fs, trials)
     assert runs == [] and run.steps == 0
     assert shown.evidence.relaxation == failed.evidence.relaxation  # nothing said of a run
 
@@ -335,20 +335,20 @@ def test_an_undecided_staged_failure_goes_on_while_the_budget_allows(monkeypatch
     the planar-sliding factor, Hoek & Bray 1981: a mechanism)."""
     from dataclasses import replace
 
-    from rockdem import relaxation
+    from rockdem import confirmation
 
     dip, phi = 20, 30
     model = V.block_on_plane(dip, rd.Joint(normal_stiffness=1e6, friction_angle=phi))
     system = rd.build_system(model)
     fs = V.sliding_fos(dip, phi)
-    starts, real = [], relaxation.relax
+    starts, real = [], confirmation.relax
 
     def relax_(system_, state, lam, factor, q0, **kw):
         starts.append(q0.copy())
         run = real(system_, state, lam, factor, q0, **kw)
         return replace(run, status="undecided") if len(starts) <= 2 else run
 
-    monkeypatch.setattr(relaxation, "relax", relax_)
+    monkeypatch.setattr(confirmation, "relax", relax_)
     failed = rd.analyse(system, strength_factor=1.1 * fs)
     assert len(starts) == 3 and not np.array_equal(starts[2], starts[1])
     assert failed.verdict == "unstable" and "mechanism" in failed.evidence.relaxation

@@ -169,16 +169,16 @@ def test_modes_do_not_depend_on_the_relaxation_round_off(monkeypatch):
     made blocks 5, 6 and 10 of Goodman & Bray's staircase slide instead of
     topple, and block 4 hop off its base (a CI machine's BLAS kernels did the
     same).  The modes the limit state decides stay put."""
-    import rockdem.relaxation as relaxation
+    import rockdem.confirmation as confirmation
 
-    relax = relaxation.relax
+    relax = confirmation.relax
     seen = []
     for eps in (0.0, 1e-12, 1e-9):
 
         def moved(system, state, f0, f1, start, *args, eps=eps, **kw):
             return relax(system, state, f0, f1, start * (1 + eps), *args, **kw)
 
-        monkeypatch.setattr(relaxation, "relax", moved)
+        monkeypatch.setattr(confirmation, "relax", moved)
         names, decided = _modes(rd.factor_of_safety(staircase(), grow=1.3, width=0.002))
         seen.append(({n: names[n] for n in decided}, decided))
     assert seen[0][1] >= set(range(1, 5)) | {7, 8, 9, 11, 12, 13}, seen[0]

@@ -18,13 +18,13 @@ from dataclasses import replace
 import numpy as np
 
 from .certificate import certificate_for, lp_limit_proof, prove_in_region, with_certificate
+from .confirmation import confirm_failed_analysis
 from .continuation import RELAXED, solve_equilibrium
 from .errors import ModelWarning, check_number
 from .linalg import norm
 from .mechanism import held_blocks, newton_mechanism, relaxation_mechanism, slip_surface
 from .model import MAX_LOAD_STEPS, Model, check_count
 from .relaxation import TOLERANCE as RELAXATION_TOLERANCE
-from .relaxation import confirm_failed_analysis
 from .results import Analysis, Evidence, Step, tabulate
 from .solver import KINKED, Solve, System, build_system, newton, residual
 from .spring_law import SpringState, commit, strength, widest_openings_first

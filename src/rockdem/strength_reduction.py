@@ -25,11 +25,11 @@ from .analysis import (
     show_mechanism,
 )
 from .certificate import lp_limit_proof, prove_failed_trial, upper_bound
+from .confirmation import CONFIRM_MARGINS, confirm_failed_trial, with_relaxation
 from .continuation import HOMOTOPY_ITERATIONS
 from .errors import InputError, check_number
 from .mechanism import relaxation_mechanism
 from .model import Model
-from .relaxation import CONFIRM_MARGINS, confirm_failed_trial, with_relaxation
 from .results import Analysis, FactorOfSafety, Step, Trial
 from .solver import Solve, System, build_system, newton
 

@@ -1,0 +1,179 @@
+"""A failure confirmed by the second solver: dynamic relaxation
+(:mod:`rockdem.relaxation`) run a little beyond a failed trial or load step.
+
+Newton's loss of equilibrium is no verdict; where the equilibrium LP
+(:mod:`rockdem.certificate`) does not prove failure, runs from the last
+equilibrium at ``CONFIRM_MARGINS`` beyond the bracket confirm it (the blocks
+keep moving) or show a stall (they settle: the search goes on from there).
+Where the LP proved it, a shorter run only shows the mechanism.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+
+from .relaxation import MAX_STEPS, Relaxation, relax, step_budget
+from .spring_law import strength
+
+#: a failed strength trial is confirmed this far beyond the top of its bracket
+#: (the next margin only if the first leaves it undecided)
+CONFIRM_MARGINS = (0.02, 0.05)
+
+
+def shows_mechanism(n_dof: int) -> bool:
+    """Is a failure the LP proved shown by a run on a model of ``n_dof``
+    unknowns?  Not where a run is too short to show it (the models whose
+    stalls are not checked either: see rockdem.continuation.stall_checked)."""
+    from .continuation import stall_checked
+
+    return stall_checked(n_dof)
+
+
+#: a run after a proof only shows the mechanism: segments of this many steps
+#: (the brick slopes' moving blocks were the same as with MAX_STEPS: 533 of
+#: 1,021 and 1,547 of 2,952; 2,952 blocks: search 9.5 -> 8.2 s)
+SHOW_STEPS = MAX_STEPS // 2
+
+
+def confirm_failed_analysis(system, failed, state, q, load_factor: float):
+    """A failed staged analysis checked by dynamic relaxation at the load it
+    failed to carry, from its last equilibrium (``state``, ``q``): the
+    statement goes into its evidence.  Returns ``(analysis, run)``; the
+    run's late motion is the mechanism (also where the LP proved failure)."""
+    proven = bool(failed.evidence.certified)
+    factor = failed.strength_factor
+    run = _run(system, state, load_factor, factor, q, MAX_STEPS, not proven)
+    run, shed = _shedding(system, state, load_factor, factor, run, MAX_STEPS, not proven)
+    return with_relaxation(failed, f"{run} at load factor {load_factor:.4g}{shed}"), run
+
+
+def _run(system, state, load_factor, factor, q, steps, look):
+    """A run from ``q`` in segments of ``steps``, gone on while undecided."""
+    run = relax(
+        system, state, load_factor, factor, q, max_steps=steps, extend=True, second_look=look
+    )
+    return _go_on(system, state, load_factor, factor, run, steps, look)
+
+
+def _go_on(system, state, load_factor, factor, run, steps, look):
+    """A run still undecided (neither settling nor moving clearly) goes on
+    from where it stopped while :func:`step_budget` allows.  (A 1e-4 m high
+    slope's run stopped undecided at 8e-7 of the loads after 12,000 steps with
+    one CPU's BLAS kernels, where another's found it settling and went on to
+    equilibrium at 13,193.)"""
+    done = run.steps
+    budget = step_budget(system.assembly.n_dof)
+    while run.status == "undecided" and done + MAX_STEPS <= budget:
+        run = relax(
+            system,
+            state,
+            load_factor,
+            factor,
+            run.q,
+            max_steps=steps,
+            extend=True,
+            second_look=look,
+        )
+        done += run.steps
+        run = replace(run, steps=done)
+    return run
+
+
+def confirm_failed_trial(system, failed, base, factor: float, trials):
+    """A failed strength trial checked by dynamic relaxation a little beyond
+    the limit (``factor x (1 + margin)``), from the last stable trial
+    ``base``: a mechanism there is stated in the failed trial's evidence
+    (proof ``"dynamic-relaxation"`` unless the LP proved it).  Right at the
+    limit the excess force is too small for the blocks to move visibly.
+    A run still undecided at the last margin (neither settling nor moving
+    clearly) goes on from where it stopped while :func:`step_budget` allows
+    (small models; one segment from 25,000 dof): toppling columns ten
+    times larger than Goodman & Bray's, stopped there, read 0.293 instead
+    of 0.374, after a change in how the gravity state is released.
+    Returns ``(analysis, trials, run, factor of the run, first run)``; a run
+    that found equilibrium there shows that the limit was a stall of
+    Newton's method.  The first run, at the first margin, is returned as
+    well: undecided there and a mechanism farther on does not confirm the
+    bracket (the caller may go on from it)."""
+    asm = system.assembly
+    q0 = base.q
+    state = base.state.without_slip()
+    look = not failed.evidence.certified  # proven: the run only shows the mechanism
+    if not look and not shows_mechanism(asm.n_dof):
+        # (its few blocks at the face would be discarded for Newton's mechanism
+        # anyway: rockdem.mechanism.first_movers; 9,638 blocks: 7.7 s of 75)
+        idle = Relaxation("undecided", q0, 0, float("nan"), 0.0)
+        return failed, list(trials), idle, factor * (1.0 + CONFIRM_MARGINS[0]), idle
+    steps = MAX_STEPS if look else SHOW_STEPS
+    first = None
+    for margin in CONFIRM_MARGINS:
+        beyond = factor * (1.0 + margin)
+        run = relax(
+            system,
+            state,
+            base.load_factor,
+            beyond,
+            q0,
+            max_steps=steps,
+            extend=True,
+            second_look=look,
+        )
+        first = run if first is None else first
+        if run.status != "undecided":  # a mechanism, or equilibrium: the limit was a stall
+            break
+    shed = ""
+    if look:  # (a proven failure's run only shows the mechanism: no more runs for it)
+        run = _go_on(system, state, base.load_factor, beyond, run, steps, look)
+        run, shed = _shedding(system, state, base.load_factor, beyond, run, steps, look)
+    text = f"{run} at F = {beyond:.6g} ({margin:.0%} beyond the bracket)" + shed
+    failed = with_relaxation(failed, text, beyond if run.status == "mechanism" else None)
+    trials = list(trials)
+    last_failed = max(i for i, t in enumerate(trials) if not t.stable)
+    trials[last_failed] = replace(trials[last_failed], evidence=failed.evidence)
+    return failed, trials, run, beyond, first
+
+
+#: rounds of (relaxed equilibrium -> its failures committed -> relaxed again)
+#: while the committed failures shed strength (brittle cohesion, tension)
+SHED_ROUNDS = 3
+
+
+def _shedding(system, state, load_factor, factor, run, steps, look):
+    """A run's equilibrium with its failures committed, relaxed again while
+    they shed strength: a run keeps its strengths fixed, so a failure that
+    follows the loss of brittle cohesion (springs at their peak in the
+    equilibrium, at their residual strength once committed) was never seen:
+    the search restarted from the equilibrium and lost it again, and ended
+    undecided (a plane failure with c 25, residual 0: every run, at 2, 3
+    and 5 spring points).  Returns the last run and a note on the rounds."""
+    from .solver import residual
+    from .spring_law import commit
+
+    reduce = system.model.settings.reduce_tensile
+    rounds = 0
+    while run.status == "equilibrium" and rounds < SHED_ROUNDS:
+        resp, _ = residual(system, run.q, state, load_factor, factor)
+        _, ds = system.assembly.relative_displacement(run.q)
+        after = commit(system.springs, state, resp, ds, 0).without_slip()
+        before = strength(system.springs, state, factor, reduce)
+        if all(
+            np.array_equal(a, b)
+            for a, b in zip(before, strength(system.springs, after, factor, reduce), strict=True)
+        ):
+            break  # nothing shed: the equilibrium stands
+        state, rounds = after, rounds + 1
+        run = _run(system, state, load_factor, factor, run.q, steps, look)
+    lost = "an equilibrium" if rounds == 1 else f"{rounds} equilibria"
+    if not rounds:
+        return run, ""
+    return run, f" (after {lost} lost as the joints failing in each shed their strength)"
+
+
+def with_relaxation(failed, text: str, confirmed_at: float | None = None):
+    """``failed`` (an Analysis) with ``text`` as its last step's relaxation
+    evidence (and the strength factor where it confirmed a mechanism)."""
+    last = failed.steps[-1]
+    ev = replace(last.evidence, relaxation=text, confirmed_at=confirmed_at)
+    return replace(failed, steps=(*failed.steps[:-1], replace(last, evidence=ev)))
