@@ -557,7 +557,7 @@ def test_a_pretension_that_leaves_no_equilibrium_leaves_the_bolt_out(monkeypatch
 
     from rockdem import analysis
 
-    settle = analysis._settle
+    settle = analysis.settle
 
     def no_equilibrium_once_installed(system, state, *args, **kwargs):
         sol, new = settle(system, state, *args, **kwargs)
@@ -565,7 +565,7 @@ def test_a_pretension_that_leaves_no_equilibrium_leaves_the_bolt_out(monkeypatch
             return replace(sol, converged=False), state
         return sol, new
 
-    monkeypatch.setattr(analysis, "_settle", no_equilibrium_once_installed)
+    monkeypatch.setattr(analysis, "settle", no_equilibrium_once_installed)
     model = _stable_block_with_bolt(installed="after_loads", pretension=10.0, name="P1")
     with pytest.warns(rd.ModelWarning, match="bolts P1 .* were not installed: locking off"):
         a = rd.analyse(model)

@@ -141,13 +141,13 @@ def test_a_cascade_of_failures_cut_short_is_warned(monkeypatch):
     round's are not committed, and the analysis says so (set to 1 here; the
     heel of a block lifted by a seismic load opens, and the base then
     yields)."""
-    from rockdem import analysis
+    from rockdem import redistribution
     from rockdem.verification import block_on_plane
 
     joint = rd.Joint(normal_stiffness=1e6, friction_angle=35, cohesion=5, tensile_strength=0.0)
     loads = rd.Loads(seismic_h=0.1, seismic_v=0.05)
     model = block_on_plane(30, joint, width=2.0, height=2.0, unit_weight=25, loads=loads)
-    monkeypatch.setattr(analysis, "MAX_CASCADE", 1)
+    monkeypatch.setattr(redistribution, "MAX_CASCADE", 1)
     with pytest.warns(rd.ModelWarning, match="kept spreading for 1 rounds") as said:
         a = rd.analyse(model)
     assert a.stable and len([w for w in said if "kept spreading" in str(w.message)]) >= 1

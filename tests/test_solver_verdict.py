@@ -500,14 +500,14 @@ def _load_levels_tried(monkeypatch, model):
     def not_solved(system, state, lam, factor, region=None):
         return Certificate(lam, factor, None, "not solved (a large model)")
 
-    real, levels = analysis._settle, []
+    real, levels = analysis.settle, []
 
     def settle(system, state, q0, lam, *args, **kwargs):
         levels.append(lam)
         return real(system, state, q0, lam, *args, **kwargs)
 
     monkeypatch.setattr(analysis, "certificate_for", not_solved)
-    monkeypatch.setattr(analysis, "_settle", settle)
+    monkeypatch.setattr(analysis, "settle", settle)
     return rd.analyse(model, load_steps=1), levels
 
 

@@ -4,8 +4,8 @@
 each step to equilibrium, and after every converged step commits the spring
 state; where springs failed and lost strength, the same load is solved
 again until no more strength is lost (the progressive redistribution of
-excess force).  The factor of safety (strength reduction) builds on it:
-:mod:`rockdem.strength_reduction`.
+excess force, :mod:`rockdem.redistribution`).  The factor of safety
+(strength reduction) builds on it: :mod:`rockdem.strength_reduction`.
 """
 
 from __future__ import annotations
@@ -19,117 +19,20 @@ import numpy as np
 
 from .certificate import certificate_for, lp_limit_proof, prove_in_region, with_certificate
 from .confirmation import confirm_failed_analysis
-from .continuation import RELAXED, solve_equilibrium
+from .continuation import RELAXED
 from .errors import ModelWarning, check_number
-from .linalg import norm
 from .mechanism import held_blocks, newton_mechanism, relaxation_mechanism, slip_surface
 from .model import MAX_LOAD_STEPS, Model, check_count
-from .relaxation import TOLERANCE as RELAXATION_TOLERANCE
+from .redistribution import settle
 from .results import Analysis, Evidence, Step, tabulate
-from .solver import KINKED, Solve, System, build_system, newton, residual
-from .spring_law import SpringState, commit, strength, widest_openings_first
+from .solver import Solve, System, build_system, newton, residual
+from .spring_law import SpringState, commit
 from .trust import large_displacement
 
 log = logging.getLogger(__name__)
 
-#: cascade limit: re-solves at one load level after strength was lost
-MAX_CASCADE = 100
 #: a failed load step is retried in up to this many equal sub-steps (halving)
 MAX_SUBSTEPS = 8
-
-
-def _settle(
-    system,
-    state,
-    q0,
-    load_factor,
-    factor,
-    stage,
-    base_factor=None,
-    total=False,
-    resolution=None,
-    first: Solve | None = None,
-    proven=None,
-    limit_proof=None,
-):
-    """Solve at one load level, re-solving while committed failures shed strength.
-
-    Returns ``(solve, state)``; the state is committed only if the solve
-    converged.  ``total=True`` keeps the plastic slip at zero (the shear
-    spring follows the total relative displacement): used by the strength
-    trials, see :func:`factor_of_safety`.  ``first``: the first solve, when
-    it was found another way (an equilibrium of the dynamic relaxation).
-    """
-    tol = system.model.settings.tolerance
-    scale = system.assembly.dof_scale
-    f_norm = norm(load_factor * system.f_ext * scale)
-    sol = first or solve_equilibrium(
-        system,
-        state,
-        load_factor=load_factor,
-        strength_factor=factor,
-        q0=q0,
-        base_factor=base_factor,
-        resolution=resolution,
-        proven=proven,
-        limit_proof=limit_proof,
-    )
-    iterations, history = sol.iterations, list(sol.residuals)
-    for _ in range(MAX_CASCADE):
-        if not sol.converged:
-            break
-        dn, ds = system.assembly.relative_displacement(sol.q)
-        in_force = strength(system.springs, state, factor, system.model.settings.reduce_tensile)
-        response, deferred = widest_openings_first(
-            system.springs, state, sol.response, dn, in_force
-        )
-        new_state = commit(system.springs, state, response, ds, stage)
-        if system.bolts is not None:  # bolts that reached their capacity, and when
-            yielded = system.bolts.forces(sol.q, new_state.bolt_reference)[2]
-            new_state = new_state.with_bolt_yield(yielded, stage)
-        if total:
-            new_state = new_state.without_slip()
-        resp, r = residual(system, sol.q, new_state, load_factor, factor)
-        state = new_state
-        # an equilibrium of the dynamic relaxation (or a Newton solve that stopped
-        # within that method's tolerance) holds to that tolerance
-        held = max(tol, RELAXATION_TOLERANCE) if sol.reason in (RELAXED, KINKED) else tol
-        if (f_norm == 0 or norm(r * scale) <= held * f_norm) and not deferred:
-            sol = Solve(True, sol.q, resp, iterations, history, sol.reason, sol.direction)
-            break
-        sol = solve_equilibrium(
-            system,
-            state,
-            load_factor=load_factor,
-            strength_factor=factor,
-            q0=sol.q,
-            base_factor=factor,
-        )
-        iterations += sol.iterations
-        history += sol.residuals
-    else:
-        if sol.converged:  # (never seen: bonds breaking widest first add rounds)
-            warnings.warn(
-                ModelWarning(
-                    f"the failures at load step {stage} kept spreading for {MAX_CASCADE} "
-                    "rounds of redistribution; the last round's failures are not committed"
-                ),
-                stacklevel=2,
-            )
-    out = Solve(
-        sol.converged,
-        sol.q,
-        sol.response,
-        iterations,
-        history,
-        sol.reason,
-        sol.direction,
-        sol.reached,
-        sol.reached_q,
-        sol.failed_at,
-        sol.relaxation,
-    )
-    return out, state
 
 
 def _evidence(sol: Solve) -> Evidence:
@@ -193,7 +96,7 @@ def _load_step(
         limit_proof = None
         if width is not None and lam_prev == 0.0 and target == lam:
             limit_proof = lp_limit_proof(system, state, target, width)
-        sol, new_state = _settle(
+        sol, new_state = settle(
             system,
             state,
             q0,
@@ -450,7 +353,7 @@ def _install_bolts(system, sol, state, q, load_factor, factor, stage):
     installed = state.with_bolts_installed(bolts.displacement(q))
     if not np.any(bolts.pretension[waiting]):
         return sol, installed, q
-    locked, new_state = _settle(system, installed, q, load_factor, factor, stage)
+    locked, new_state = settle(system, installed, q, load_factor, factor, stage)
     if not locked.converged:
         names = dict.fromkeys(np.asarray(bolts.names)[bolts.bolt[waiting]])
         warnings.warn(
@@ -485,13 +388,13 @@ def _from_relaxed(system, state, q, load_factor, factor, stage):
     brought within its tolerance: polished by Newton where it can be, else
     taken as it is (:data:`~rockdem.continuation.RELAXED`), then settled
     (committed, and re-solved while failures shed strength).  Returns
-    ``(solve, state)`` as :func:`_settle`."""
+    ``(solve, state)`` as :func:`rockdem.redistribution.settle`."""
     max_it = system.model.settings.max_iterations
     first = newton(system, state, load_factor, factor, q, max_it)
     if not first.converged:
         resp, _ = residual(system, q, state, load_factor, factor)
         first = Solve(True, q, resp, first.iterations, first.residuals, RELAXED, np.zeros_like(q))
-    return _settle(system, state, first.q, load_factor, factor, stage, first=first)
+    return settle(system, state, first.q, load_factor, factor, stage, first=first)
 
 
 def analyse_from(
@@ -510,7 +413,7 @@ def analyse_from(
     found here are recorded with ``stage``.
     """
     system = model if isinstance(model, System) else build_system(model)
-    sol, new_state = _settle(system, state, q0, 1.0, strength_factor, stage)
+    sol, new_state = settle(system, state, q0, 1.0, strength_factor, stage)
     n_failed = int((new_state.yielded | new_state.broken).sum())
     steps = (Step(stage, 1.0, strength_factor, sol.converged, _evidence(sol), n_failed),)
     if sol.converged:

@@ -19,7 +19,6 @@ import numpy as np
 from .analysis import (
     _evidence,
     _package,
-    _settle,
     _warn_bolts_not_installed,
     analyse,
     show_mechanism,
@@ -30,6 +29,7 @@ from .continuation import HOMOTOPY_ITERATIONS
 from .errors import InputError, check_number
 from .mechanism import relaxation_mechanism
 from .model import Model
+from .redistribution import settle
 from .results import Analysis, FactorOfSafety, Step, Trial
 from .solver import Solve, System, build_system, newton
 
@@ -410,7 +410,7 @@ def _continue(
     start = base.state.without_slip()
     at = base.strength_factor if base_factor is None else base_factor
     limit_proof = None if width is None else lp_limit_proof(system, start, lam, width)
-    sol, state = _settle(
+    sol, state = settle(
         system,
         start,
         q0,
