@@ -164,6 +164,35 @@ def test_a_model_too_large_for_the_whole_lp_is_proven_on_its_moving_blocks(monke
     assert "moving blocks" in fos.failed_analysis.evidence.certificate
 
 
+@pytest.mark.parametrize("creep", [True, False])
+def test_a_solve_still_converging_at_its_iteration_limit_goes_on(monkeypatch, creep):
+    """The creep over the spring law's kinks near the plateau grows with the
+    model (a 28,556-block brick slope: 1.6e-5 of the loads after 80
+    iterations, converged in 101; stopped at 80 its search bisected, 712
+    factorisations instead of 192).  A solve still converging at its limit
+    goes on.  Here the 1,021-block brick slope's solve (31 iterations) is
+    given 20: it goes on and the search lands on tan 35 / tan 20; with
+    the creep switched off it stops there and the search bisects."""
+    monkeypatch.setattr(limit, "MAX_ITERATIONS", 20)
+    if not creep:
+        monkeypatch.setattr(limit, "CREEP_ITERATIONS", 0)
+    solves, real = [], limit.work_controlled
+
+    def spy(*args, **kw):
+        solves.append(real(*args, **kw))
+        return solves[-1]
+
+    monkeypatch.setattr(limit, "work_controlled", spy)
+    system = rd.build_system(V.brick_slope(1000))
+    fos = rd.factor_of_safety(system)
+    exact = np.tan(np.radians(35)) / np.tan(np.radians(20))
+    assert solves
+    assert solves[0].converged is creep
+    assert (solves[0].iterations > 20) is creep
+    assert ("found by work control" in fos.failed_analysis.evidence.reason) is creep
+    assert fos.bracket[0] <= exact <= fos.bracket[1] + 1e-9
+
+
 def test_brittle_joints_keep_the_bisection(monkeypatch):
     """Where committing the failures sheds strength (brittle cohesion), the
     limit of a trial's strengths is not the slope's: no step to the limit
