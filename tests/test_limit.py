@@ -193,6 +193,20 @@ def test_a_solve_still_converging_at_its_iteration_limit_goes_on(monkeypatch, cr
     assert fos.bracket[0] <= exact <= fos.bracket[1] + 1e-9
 
 
+@pytest.mark.parametrize(("answer", "done"), [(False, True), (None, False)])
+def test_the_step_is_given_up_only_where_the_lp_answered(answer, done):
+    """A failure the LP does not prove may be a stall below the limit: the
+    step to the limit is given up (a near-flat benched slope: work control
+    found nothing to settle).  Where the LP was too large to solve (None:
+    a 94,533-block slope's trial at F = 1.5 stalled and moved 92,562 of its
+    blocks, 832,461 spring points), a later failure is asked again."""
+    system = _block(20.0, 30.0)
+    step = limit.LimitStep(system, None, 1.0, limit.LimitProof(lambda F, moving: answer, 0.005))
+    step.slip = np.ones(system.assembly.n_dof)
+    assert step.ready and not step.beyond_proven((1.5, 0.5))
+    assert step.done is done and step.ready is not done
+
+
 def test_brittle_joints_keep_the_bisection(monkeypatch):
     """Where committing the failures sheds strength (brittle cohesion), the
     limit of a trial's strengths is not the slope's: no step to the limit

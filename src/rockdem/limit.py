@@ -249,9 +249,10 @@ class LimitProof:
     moving)`` is True when the equilibrium LP proves that no equilibrium
     exists at ``F`` (``moving``: the blocks of the mechanism, bool per block,
     whose equations alone may prove it on models too large for the whole
-    LP); ``width`` is the bracket the search accepts."""
+    LP), None where that LP was too large to be solved; ``width`` is the
+    bracket the search accepts."""
 
-    proves: Callable[[float, np.ndarray | None], bool]
+    proves: Callable[[float, np.ndarray | None], bool | None]
     width: float
 
 
@@ -277,12 +278,14 @@ class LimitStep:
         control goes only where it does: else the failure may be a stall
         below the limit, or the LP not tight there (a near-flat benched
         slope that stands up to F = 100: five work-controlled solves of
-        50-80 iterations for nothing)."""
+        50-80 iterations for nothing).  Where the LP was too large to solve
+        (a stall far below the limit moved nearly every block: 92,562 of
+        94,534 at F = 1.5, limit 1.92) a later failure is asked again."""
         if bad is None:
             return False
         proven = self.proof.proves(bad[0], self.moving)
-        self.done = self.done or not proven
-        return proven
+        self.done = self.done or proven is False
+        return bool(proven)
 
     def failed(self, trial: Solve, q_from: np.ndarray) -> None:
         """Take note of a failed solve that started from ``q_from``."""
@@ -342,6 +345,6 @@ class LimitStep:
         width = self.proof.width * min(1.0, F_ok)
         for share in LIMIT_PROOF_SHARES:
             top = F_ok + share * width
-            if self.proof.proves(top, self.moving):
+            if self.proof.proves(top, self.moving):  # (None: not solved, no proof)
                 return top
         return None
