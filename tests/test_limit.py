@@ -193,6 +193,25 @@ def test_a_solve_still_converging_at_its_iteration_limit_goes_on(monkeypatch, cr
     assert fos.bracket[0] <= exact <= fos.bracket[1] + 1e-9
 
 
+#: the out-of-balance force (share of the loads) of a 28,556-block brick
+#: slope's work-controlled solve over its iterations 75-95 (one accepted
+#: entry each), on the plateau F = 1.923804: 3.6-fold over the window
+CREEPING_28556 = [2.22e-05, 1.96e-05, 1.86e-05, 1.73e-05, 1.68e-05, 1.57e-05, 1.48e-05]
+CREEPING_28556 += [1.39e-05, 1.33e-05, 1.27e-05, 1.24e-05, 1.2e-05, 1.15e-05, 1.1e-05]
+CREEPING_28556 += [1.05e-05, 9.46e-06, 9.12e-06, 8.44e-06, 8.34e-06, 6.66e-06, 6.16e-06]
+
+
+def test_a_solve_falling_two_fold_over_the_window_is_still_converging():
+    """The 28,556-block solve above went on to converge at iteration 101
+    (the shift fell, full steps); stopped at 95 (the rule was 4-fold) the
+    search bisected: 727 factorisations instead of about 200.  A force that
+    stays put, or falls less than 2-fold, stops the solve."""
+    assert limit.still_converging(CREEPING_28556)
+    assert not limit.still_converging([*CREEPING_28556[:-1], 1.2e-5])  # 1.85-fold
+    assert not limit.still_converging([1e-5] * 21)
+    assert not limit.still_converging(CREEPING_28556[-20:])  # not a whole window yet
+
+
 @pytest.mark.parametrize(("answer", "done"), [(False, True), (None, False)])
 def test_the_step_is_given_up_only_where_the_lp_answered(answer, done):
     """A failure the LP does not prove may be a stall below the limit: the
