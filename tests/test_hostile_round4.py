@@ -112,6 +112,27 @@ def test_the_teardown_after_ctrl_c_is_bounded():
     assert _within(5, lambda: 1 / 0) is True  # an error in the close: done
 
 
+def test_after_ctrl_c_on_its_own_cluster_the_process_ends_without_exit_handlers():
+    """Exit handlers that would hang (distributed's close its cluster again
+    and join its threads) do not keep a study stopped by Ctrl-C from
+    exiting; without that interrupt they run as usual."""
+    code = (
+        "import atexit, sys, time\n"
+        "atexit.register(time.sleep, 120)\n"
+        "import rockdem.studies.on_dask as od\n"
+        "od.OWN_CLUSTER_INTERRUPTED = sys.argv[1] == 'interrupted'\n"
+        "from rockdem.cli import _exit\n"
+        "_exit(130)\n"
+    )
+    env = {**os.environ, "PYTHONPATH": SRC + os.pathsep + os.environ.get("PYTHONPATH", "")}
+    start = time.monotonic()
+    done = subprocess.run([sys.executable, "-c", code, "interrupted"], env=env, timeout=60)
+    assert done.returncode == 130
+    assert time.monotonic() - start < 60
+    with pytest.raises(subprocess.TimeoutExpired):  # the handler runs: it sleeps
+        subprocess.run([sys.executable, "-c", code, "other"], env=env, timeout=15)
+
+
 # ------------------------------------------------------ limit-equilibrium case files
 PLANE = (
     "height: 30, face_angle: 60, plane_dip: 30, friction_angle: 30, cohesion: 48, unit_weight: 25.5"

@@ -182,11 +182,18 @@ def run_on_dask(plan, todo, on_row, client, workers) -> int:
         raise
     finally:
         if interrupted and own:
+            global OWN_CLUSTER_INTERRUPTED
+            OWN_CLUSTER_INTERRUPTED = True
             _within(TEARDOWN_SECONDS, _tear_down, c, futures, own)
         else:
             _tear_down(c, futures, own, quiet=False)
     return n_workers
 
+
+#: set when Ctrl-C stopped a study on its own local cluster: the command
+#: line then ends the process without the interpreter's exit handlers
+#: (rockdem.cli.main), where distributed's would close that cluster again
+OWN_CLUSTER_INTERRUPTED = False
 
 #: Seconds the study waits, after Ctrl-C, for its own cluster to close; the
 #: worker processes exit with this process if it has not (distributed's
