@@ -428,3 +428,53 @@ def test_a_relaxed_equilibrium_lost_to_brittle_joints_is_relaxed_again(tmp_path)
         assert a.evidence.relaxation.startswith("dynamic relaxation: mechanism")
     fos = rd.factor_of_safety(model)
     assert fos.value is not None and fos.value < 1.0
+
+
+@pytest.mark.parametrize("fraction", [0.9, 1.1])
+def test_a_run_keeping_the_slip_returns_the_slip_its_forces_used(fraction):
+    """Block on a plane (Hoek & Bray 1981, FS = tan(phi) / tan(dip)): a run
+    keeping each spring's plastic slip returns it, and the solve's law with
+    that slip gives the run's own out-of-balance force at its end (the
+    state a staged analysis goes on from, see equilibrium_keeping_slip)."""
+    from dataclasses import replace
+
+    from rockdem.linalg import norm
+    from rockdem.solver import residual
+
+    fs = V.sliding_fos(25, 35)
+    model = V.block_on_plane(25, rd.Joint(normal_stiffness=1e6, friction_angle=35))
+    system, run = _run(model, fraction * fs, keep_slip=True)
+    assert run.slip is not None and run.slip.shape == (system.springs.n_springs,)
+    state = SpringState.initial(system.springs.n_springs)
+    r = residual(system, run.q, replace(state, slip=run.slip), 1.0, fraction * fs)[1]
+    scale = system.assembly.dof_scale
+    assert norm(r * scale) / norm(system.f_ext * scale) == pytest.approx(run.ratio, rel=1e-6)
+    assert (run.status == "equilibrium") == (fraction < 1.0)
+    # the solve's law's run keeps no slip
+    assert _run(model, fraction * fs)[1].slip is None
+
+
+@pytest.mark.parametrize("fraction", [0.9, 1.1])
+def test_newton_from_a_settled_slip_keeping_run_finds_equilibrium_only_where_one_exists(
+    fraction,
+):
+    """The same block: below the limit Newton from the slip-keeping run's
+    equilibrium converges (a stall's second look: the search goes on);
+    beyond it that run slides, and nothing is returned."""
+    from rockdem.confirmation import equilibrium_keeping_slip
+    from rockdem.relaxation import Relaxation
+
+    fs = V.sliding_fos(25, 35)
+    model = V.block_on_plane(25, rd.Joint(normal_stiffness=1e6, friction_angle=35))
+    system = rd.build_system(model)
+    state = SpringState.initial(system.springs.n_springs)
+    q0 = np.zeros(system.assembly.n_dof)
+    undecided = Relaxation("undecided", q0, 4000, 0.5, 0.1)
+    found, sol = equilibrium_keeping_slip(system, state, 1.0, fraction * fs, q0, undecided)
+    if fraction < 1.0:
+        assert found is not None and found.status == "equilibrium" and sol.converged
+        assert found.newton_from_slip == sol.iterations
+        assert np.array_equal(found.q, sol.q)
+        assert "a run keeping each spring's plastic slip settled" in str(found)
+    else:
+        assert found is None and sol is None

@@ -324,7 +324,8 @@ def analyse(
                 # Newton stalled where the second method found equilibrium (its
                 # failures committed, see rockdem.relaxation): a stall, not a
                 # verdict; go on from there
-                rescued, new_state = _from_relaxed(system, state, run.q, lam, strength_factor, k)
+                held = state if run.slip is None else replace(state, slip=run.slip)
+                rescued, new_state = _from_relaxed(system, held, run.q, lam, strength_factor, k)
                 if rescued.converged:
                     ev = replace(_evidence(rescued), relaxation=failed.evidence.relaxation)
                     n_failed = int((new_state.yielded | new_state.broken).sum())

@@ -104,14 +104,32 @@ class Relaxation:
     #: a run keeping the plastic slip from the same start, where this one moved
     #: like a mechanism and that one did not (see ``keep_slip`` of :func:`relax`)
     slip_check: Relaxation | None = None
+    #: Newton's iterations to the equilibrium of the solve's law from where
+    #: the slip-keeping run ended, where this run did not settle (see
+    #: rockdem.confirmation.equilibrium_keeping_slip)
+    newton_from_slip: int | None = None
+    #: each spring's plastic slip at the end of a run that kept it (``keep_slip``)
+    slip: np.ndarray | None = None
 
     def __str__(self) -> str:
+        check = self.slip_check
+        if check is not None and self.newton_from_slip is not None:
+            how = (
+                f"settled in {check.steps} steps"
+                if check.status == "equilibrium"
+                else f"got to {check.ratio:.2e} of the loads in {check.steps} steps"
+            )
+            return (
+                f"dynamic relaxation: equilibrium; a run under the solve's law did not settle "
+                f"in {self.steps} steps (unbalanced force {self.ratio:.2e} of the loads), a run "
+                f"keeping each spring's plastic slip {how}, and Newton's method from there "
+                f"found equilibrium in {self.newton_from_slip} iterations"
+            )
         text = (
             f"dynamic relaxation: {self.status} after {self.steps} steps "
             f"(unbalanced force {self.ratio:.2e} of the loads; motion over the last quarter "
             f"{self.motion:.3g} x the elastic displacement)"
         )
-        check = self.slip_check
         if check is not None:
             how = (
                 f"settled in {check.steps} steps"
@@ -181,6 +199,7 @@ def relax(
         system, state.slip.copy(), strengths, f, state.bolt_reference, keep_slip
     )
 
+    kept_slip = unbalanced.slip if keep_slip else None  # (updated in place by the run)
     mass = _mass(system)
     elastic = system.elastic_scale * max(load_factor, 1e-12)
     budget = step_budget(asm.n_dof, max_steps) if extend else max_steps
@@ -208,7 +227,7 @@ def relax(
         if not np.isfinite(ratio):
             break
         if ratio <= tolerance:
-            return Relaxation("equilibrium", q, step, float(ratio), 0.0)
+            return Relaxation("equilibrium", q, step, float(ratio), 0.0, slip=kept_slip)
         into = step - seg_start
         if into == (3 * max_steps) // 4:
             late_start = q.copy()
@@ -244,7 +263,16 @@ def relax(
                 pending is not None and motion >= NOT_SLOWING * pending
             ):
                 windows = tuple(b - a for a, b in itertools.pairwise(marks))
-                run = Relaxation("mechanism", q, step, float(ratio), motion, late, windows=windows)
+                run = Relaxation(
+                    "mechanism",
+                    q,
+                    step,
+                    float(ratio),
+                    motion,
+                    late,
+                    windows=windows,
+                    slip=kept_slip,
+                )
                 if second_look and not keep_slip:
                     check = relax(
                         system,
@@ -262,12 +290,14 @@ def relax(
             # moving: it must keep moving in the next segment (a second look)
             pending = motion
         elif not (settling and another):
-            return Relaxation("undecided", q, step, float(ratio), motion, late, settling)
+            return Relaxation(
+                "undecided", q, step, float(ratio), motion, late, settling, slip=kept_slip
+            )
         else:
             pending = None
         # settling, or moving where the budget allows a second look: one more segment
         seg_start, late_start, late_low, peaks = step, None, np.inf, [0.0]
-    return Relaxation("undecided", q, step, float(ratio), 0.0)
+    return Relaxation("undecided", q, step, float(ratio), 0.0, slip=kept_slip)
 
 
 def _mass(system) -> np.ndarray:
