@@ -41,9 +41,9 @@ def equilibrium_keeping_slip(
 ):
     """Where a run under the solve's law (``run``, from ``q0``) did not
     settle: Newton's method at ``factor`` from the equilibrium a run keeping
-    each spring's plastic slip settled into.  Returns ``(run marked "equilibrium" at
-    Newton's displacements, Newton's solve)`` where Newton converged, else
-    ``(None, solve or None)``.
+    each spring's plastic slip settled into.  Returns ``(run marked
+    "equilibrium" at Newton's displacements, Newton's solve)`` where Newton
+    converged, else ``(None, solve or None)``.
 
     The solve's law (the shear following the total relative displacement,
     the strength the normal force) is not dissipative, and near a limit its
