@@ -75,26 +75,10 @@ def equilibrium_keeping_slip(
             system, state, load_factor, factor, q0, max_steps=MAX_STEPS, extend=True, keep_slip=True
         )
     # on while undecided and its unbalanced force still falls (SLIP_RUN_FALL
-    # over two segments), as _go_on does, with the slip it got to (the same
-    # slope in 1 load step: 3.5e-4 of the loads at 16,000 steps, 1e-7 at
-    # 56,931; the paper's slope at 0.9025 crept at 1e-5 for 80,000)
-    done, budget, ratios = kept.steps, step_budget(system.assembly.n_dof), [kept.ratio]
-    while kept.status == "undecided" and done + MAX_STEPS <= budget:
-        if len(ratios) > 2 and ratios[-1] > SLIP_RUN_FALL * ratios[-3]:
-            break
-        kept = relax(
-            system,
-            replace(state, slip=kept.slip),
-            load_factor,
-            factor,
-            kept.q,
-            max_steps=MAX_STEPS,
-            extend=True,
-            keep_slip=True,
-        )
-        done += kept.steps
-        kept = replace(kept, steps=done)
-        ratios.append(kept.ratio)
+    # over two segments), with the slip it got to (the same slope in 1 load
+    # step: 3.5e-4 of the loads at 16,000 steps, 1e-7 at 56,931; the paper's
+    # slope at 0.9025 crept at 1e-5 for 80,000)
+    kept = _go_on(system, state, load_factor, factor, kept, MAX_STEPS, True, keep_slip=True)
     if kept.status != "equilibrium":
         return None, None
     sol = newton(system, state, load_factor, factor, kept.q, HOMOTOPY_ITERATIONS)
@@ -149,27 +133,33 @@ def _run(system, state, load_factor, factor, q, steps, look):
     return _go_on(system, state, load_factor, factor, run, steps, look)
 
 
-def _go_on(system, state, load_factor, factor, run, steps, look):
+def _go_on(system, state, load_factor, factor, run, steps, look, keep_slip=False):
     """A run still undecided (neither settling nor moving clearly) goes on
     from where it stopped while :func:`step_budget` allows.  (A 1e-4 m high
     slope's run stopped undecided at 8e-7 of the loads after 12,000 steps with
     one CPU's BLAS kernels, where another's found it settling and went on to
-    equilibrium at 13,193.)"""
-    done = run.steps
+    equilibrium at 13,193.)  ``keep_slip``: a run keeping the plastic slip
+    goes on with the slip it got to, while its unbalanced force still falls
+    by SLIP_RUN_FALL over two segments."""
+    done, ratios = run.steps, [run.ratio]
     budget = step_budget(system.assembly.n_dof)
     while run.status == "undecided" and done + MAX_STEPS <= budget:
+        if keep_slip and len(ratios) > 2 and ratios[-1] > SLIP_RUN_FALL * ratios[-3]:
+            break
         run = relax(
             system,
-            state,
+            replace(state, slip=run.slip) if keep_slip else state,
             load_factor,
             factor,
             run.q,
             max_steps=steps,
             extend=True,
             second_look=look,
+            keep_slip=keep_slip,
         )
         done += run.steps
         run = replace(run, steps=done)
+        ratios.append(run.ratio)
     return run
 
 
