@@ -113,17 +113,13 @@ class Relaxation:
 
     def __str__(self) -> str:
         check = self.slip_check
-        if check is not None and self.newton_from_slip is not None:
-            how = (
-                f"settled in {check.steps} steps"
-                if check.status == "equilibrium"
-                else f"got to {check.ratio:.2e} of the loads in {check.steps} steps"
-            )
+        if check is not None and self.newton_from_slip is not None:  # (check settled)
             return (
                 f"dynamic relaxation: equilibrium; a run under the solve's law did not settle "
                 f"in {self.steps} steps (unbalanced force {self.ratio:.2e} of the loads), a run "
-                f"keeping each spring's plastic slip {how}, and Newton's method from there "
-                f"found equilibrium in {self.newton_from_slip} iterations"
+                f"keeping each spring's plastic slip settled in {check.steps} steps, and "
+                f"Newton's method from there found equilibrium in {self.newton_from_slip} "
+                "iterations"
             )
         text = (
             f"dynamic relaxation: {self.status} after {self.steps} steps "
