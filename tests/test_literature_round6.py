@@ -52,11 +52,12 @@ rectangular case reads 0.3-0.8% off the statics, the trapezoid rule's moment of 
 linear stress (3 and 5 points: 0.02%).  (3) Marked xfail: an arch
 of t/R = 0.2 at 0.995-0.998 of its critical kh, with 5 spring points, is
 reported unstable (at 0.98 it was too, until a run keeping the plastic
-slip, which settles there, gave Newton its start: it stands) with proof "dynamic-relaxation" although a statically
-admissible field exists (this limit analysis, and rockdem's own equilibrium
-LP, which says the forces could carry twice the loads); with 2 and 3 points
-the same arch stands at 0.99 / 0.985 of it, and with friction 85 degrees
-instead of 60 the verdict is the same, so the friction is not the cause.
+slip, which settles there, gave Newton its start: it stands) with proof
+"dynamic-relaxation" although a statically admissible field exists (this
+limit analysis, and rockdem's own equilibrium LP, which says the forces
+could carry twice the loads); with 2 and 3 points the same arch stands at
+0.99 / 0.985 of it, and with friction 85 degrees instead of 60 the verdict
+is the same, so the friction is not the cause.
 Newton finds no start ("no start after 559 iterations") and the relaxation
 calls the slow creep toward the far equilibrium of a nearly-hinged arch a
 mechanism ("motion over the last quarter 0.067 x the elastic
