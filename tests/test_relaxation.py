@@ -268,8 +268,9 @@ def test_an_undecided_confirmation_goes_on_while_the_budget_allows(monkeypatch):
     starts, real = [], confirmation.relax
 
     def relax_(system_, state, lam, factor, q0, **kw):
-        if kw.get("keep_slip"):  # (the second look of a run that moved: not counted)
-            return real(system_, state, lam, factor, q0, **kw)
+        if kw.get("keep_slip"):  # (a second look keeping the slip: not counted, and
+            # undecided too, or its mechanism would confirm at the first margin)
+            return replace(real(system_, state, lam, factor, q0, **kw), status="undecided")
         starts.append(q0.copy())
         run = real(system_, state, lam, factor, q0, **kw)
         return replace(run, status="undecided") if len(starts) <= 3 else run
@@ -435,7 +436,7 @@ def test_a_run_keeping_the_slip_returns_the_slip_its_forces_used(fraction):
     """Block on a plane (Hoek & Bray 1981, FS = tan(phi) / tan(dip)): a run
     keeping each spring's plastic slip returns it, and the solve's law with
     that slip gives the run's own out-of-balance force at its end (the
-    state a staged analysis goes on from, see equilibrium_keeping_slip)."""
+    state a staged analysis goes on from, see look_keeping_slip)."""
     from dataclasses import replace
 
     from rockdem.linalg import norm
@@ -455,14 +456,17 @@ def test_a_run_keeping_the_slip_returns_the_slip_its_forces_used(fraction):
 
 
 @pytest.mark.parametrize("fraction", [0.9, 1.1])
-def test_newton_from_a_settled_slip_keeping_run_finds_equilibrium_only_where_one_exists(
+def test_a_second_look_keeping_the_slip_finds_equilibrium_below_the_limit_and_sliding_beyond(
     fraction,
 ):
-    """The same block: below the limit Newton from the slip-keeping run's
-    equilibrium converges (a stall's second look: the search goes on);
-    beyond it that run slides, and nothing is returned."""
-    from rockdem.confirmation import equilibrium_keeping_slip
+    """The same block, where a run under the solve's law was undecided:
+    below the limit Newton from the slip-keeping run's equilibrium
+    converges (a stall's second look: the search goes on); beyond it that
+    run slides, and that is the verdict: a mechanism under UDEC's law,
+    saying that the solve's-law run did not settle."""
+    from rockdem.confirmation import look_keeping_slip
     from rockdem.relaxation import Relaxation
+    from rockdem.results import Evidence
 
     fs = V.sliding_fos(25, 35)
     model = V.block_on_plane(25, rd.Joint(normal_stiffness=1e6, friction_angle=35))
@@ -470,11 +474,16 @@ def test_newton_from_a_settled_slip_keeping_run_finds_equilibrium_only_where_one
     state = SpringState.initial(system.springs.n_springs)
     q0 = np.zeros(system.assembly.n_dof)
     undecided = Relaxation("undecided", q0, 4000, 0.5, 0.1)
-    found, sol = equilibrium_keeping_slip(system, state, 1.0, fraction * fs, q0, undecided)
+    look, sol = look_keeping_slip(system, state, 1.0, fraction * fs, q0, undecided)
     if fraction < 1.0:
-        assert found is not None and found.status == "equilibrium" and sol.converged
-        assert found.newton_from_slip == sol.iterations
-        assert np.array_equal(found.q, sol.q)
-        assert "a run keeping each spring's plastic slip settled" in str(found)
+        assert look.status == "equilibrium" and sol.converged
+        assert look.newton_from_slip == sol.iterations
+        assert np.array_equal(look.q, sol.q)
+        assert "a run keeping each spring's plastic slip settled" in str(look)
     else:
-        assert found is None and sol is None
+        assert look.status == "mechanism" and sol is None
+        assert look.law_run is not None and look.law_run.ratio == 0.5
+        assert look.slip is not None and np.any(np.abs(look.slip) > 0)
+        ev = Evidence("stalled", 10, (1.0,), relaxation=str(look))
+        assert ev.proof == "dynamic-relaxation"
+        assert "neither settled nor moved clearly (4000 steps" in str(look)

@@ -36,14 +36,21 @@ def shows_mechanism(n_dof: int) -> bool:
 SLIP_RUN_FALL = 0.5
 
 
-def equilibrium_keeping_slip(
+def look_keeping_slip(
     system, state, load_factor: float, factor: float, q0, run, with_slip: bool = False
 ):
-    """Where a run under the solve's law (``run``, from ``q0``) did not
-    settle: Newton's method at ``factor`` from the equilibrium a run keeping
-    each spring's plastic slip settled into.  Returns ``(run marked
-    "equilibrium" at Newton's displacements, Newton's solve)`` where Newton
-    converged, else ``(None, solve or None)``.
+    """A second look where a run under the solve's law (``run``, from ``q0``)
+    did not settle: a run from ``q0`` keeping each spring's plastic slip
+    (UDEC's incremental law).  Returns ``(verdict, Newton's solve or None)``:
+
+    * ``"equilibrium"``: that run settled and Newton's method at ``factor``
+      converged from its end (the run marked so, at Newton's displacements);
+    * ``"mechanism"``: that run moved as a mechanism (two segments), the
+      confirmation the issue asks of a second method (UDEC's own test);
+    * else ``run`` itself; where the slip-keeping run settled but Newton
+      under the caller's law found nothing from there, the run says whether
+      Newton *with that run's slip* converged (the slope stands there with
+      that slip history, not under a law without one).
 
     The solve's law (the shear following the total relative displacement,
     the strength the normal force) is not dissipative, and near a limit its
@@ -58,7 +65,11 @@ def equilibrium_keeping_slip(
     slip-keeping run settled at 0.9 in 2,748 steps.  Only a settled run:
     from one that creeps Newton converges or not by the run's rounding (the
     paper's slope at 0.9025, creeping at 1e-5 of the loads: converged in
-    kN, stalled in t).
+    kN, stalled in t).  Where the solve's law boils and the slip-keeping
+    run keeps moving, that run confirms the mechanism (two perpendicular
+    sets with brittle cohesion and a water table, 162 blocks: 'undecided'
+    at 0.7236, the solve's-law runs at 2% and 5% beyond ending at 32-39%
+    of the loads after 80,000 steps; the slip-keeping run moved).
 
     ``with_slip``: where the caller's law keeps the plastic slip between
     solves (a staged analysis commits it at each load step; a strength
@@ -79,18 +90,26 @@ def equilibrium_keeping_slip(
     # step: 3.5e-4 of the loads at 16,000 steps, 1e-7 at 56,931; the paper's
     # slope at 0.9025 crept at 1e-5 for 80,000)
     kept = _go_on(system, state, load_factor, factor, kept, MAX_STEPS, True, keep_slip=True)
+    if kept.status == "mechanism" and run.status == "undecided":
+        return replace(kept, law_run=replace(run, slip_check=None)), None
     if kept.status != "equilibrium":
-        return None, None
+        return run, None
     sol = newton(system, state, load_factor, factor, kept.q, HOMOTOPY_ITERATIONS)
     slip = None
-    if not sol.converged and with_slip:
+    if not sol.converged:
         iterations = sol.iterations
-        sol = newton(
+        own = newton(
             system, replace(state, slip=kept.slip), load_factor, factor, kept.q, HOMOTOPY_ITERATIONS
         )
-        sol, slip = replace(sol, iterations=iterations + sol.iterations), kept.slip
+        if not with_slip:  # the caller's law has no slip history: a statement only
+            stands = own.iterations if own.converged else None
+            sol = replace(sol, iterations=iterations + own.iterations)
+            if stands is None and run.slip_check is None:
+                return run, sol
+            return replace(run, slip_check=kept, newton_with_slip=stands), sol
+        sol, slip = replace(own, iterations=iterations + own.iterations), kept.slip
     if not sol.converged:
-        return None, sol
+        return run, sol
     found = replace(
         run,
         status="equilibrium",
@@ -117,8 +136,7 @@ def confirm_failed_analysis(system, failed, state, q, load_factor: float):
     factor = failed.strength_factor
     run = _run(system, state, load_factor, factor, q, MAX_STEPS, not proven)
     if not proven and run.status != "equilibrium":
-        found, _ = equilibrium_keeping_slip(system, state, load_factor, factor, q, run, True)
-        run = found if found is not None else run
+        run, _ = look_keeping_slip(system, state, load_factor, factor, q, run, True)
     if run.slip is not None:  # (its equilibrium holds with the slip it kept)
         state = replace(state, slip=run.slip)
     run, shed = _shedding(system, state, load_factor, factor, run, MAX_STEPS, not proven)
@@ -203,15 +221,20 @@ def confirm_failed_trial(system, failed, base, factor: float, trials):
             second_look=look,
         )
         if look and run.status == "undecided":
-            # (not settling under the solve's law: see equilibrium_keeping_slip)
-            found, _ = equilibrium_keeping_slip(system, state, base.load_factor, beyond, q0, run)
-            run = found if found is not None else run
+            # (not settling under the solve's law: see look_keeping_slip)
+            run, _ = look_keeping_slip(system, state, base.load_factor, beyond, q0, run)
         first = run if first is None else first
         if run.status != "undecided":  # a mechanism, or equilibrium: the limit was a stall
             break
     shed = ""
     if look:  # (a proven failure's run only shows the mechanism: no more runs for it)
+        looked = run
         run = _go_on(system, state, base.load_factor, beyond, run, steps, look)
+        if run.status == "undecided" and looked.slip_check is not None:
+            # what the slip-keeping look found stays in the statement
+            run = replace(
+                run, slip_check=looked.slip_check, newton_with_slip=looked.newton_with_slip
+            )
         run, shed = _shedding(system, state, base.load_factor, beyond, run, steps, look)
     text = f"{run} at F = {beyond:.6g} ({margin:.0%} beyond the bracket)" + shed
     failed = with_relaxation(failed, text, beyond if run.status == "mechanism" else None)

@@ -18,7 +18,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from .confirmation import equilibrium_keeping_slip
+from .confirmation import look_keeping_slip
 from .limit import LimitProof, LimitStep
 from .linalg import norm
 from .relaxation import relax
@@ -320,11 +320,9 @@ def _strength_homotopy(
                     polish = newton(system, state, lam, bad[0], dr.q, HOMOTOPY_ITERATIONS)
                     total += polish.iterations
                     if dr.status != "equilibrium" and not polish.converged:
-                        found, by_slip = equilibrium_keeping_slip(
-                            system, state, lam, bad[0], q_ok, dr
-                        )
+                        dr, by_slip = look_keeping_slip(system, state, lam, bad[0], q_ok, dr)
                         total += by_slip.iterations if by_slip is not None else 0
-                        polish = by_slip if found is not None else polish
+                        polish = by_slip if dr.status == "equilibrium" else polish
                 if polish is not None and (dr.status == "equilibrium" or polish.converged):
                     # a stall, not the limit: go on from there
                     if not polish.converged:  # relaxation's equilibrium, to its tolerance
