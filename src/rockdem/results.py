@@ -363,6 +363,13 @@ class FactorOfSafety:
     definition: str
     lp_bound: float | None = None
 
+    def __post_init__(self) -> None:
+        # plain floats, whatever arithmetic made them (a bracket printed as
+        # ``(3.53, np.float64(3.71))`` is noise in a user's report)
+        plain = None if self.value is None else float(self.value)
+        object.__setattr__(self, "value", plain)
+        object.__setattr__(self, "bracket", tuple(float(b) for b in self.bracket))
+
     @property
     def proof(self) -> str | None:
         """How the upper end of the bracket is known to fail: ``"lp-certificate"``
