@@ -37,12 +37,12 @@ import numpy as np
 import scipy.sparse as sp
 
 from .linalg import norm
+from .spring_law import SpringState, strength
 
 try:  # the kernel behind ``csr_array @ vector``, without SciPy's dispatch
     from scipy.sparse._sparsetools import csr_matvec as _csr_matvec
 except ImportError:  # pragma: no cover - a SciPy that moved it: the public product
     _csr_matvec = None
-from .spring_law import SpringState, strength
 
 #: Cundall's local damping coefficient (UDEC's default)
 DAMPING = 0.8
@@ -364,6 +364,7 @@ class _Unbalanced:
         springs = system.springs
         n = springs.n_springs
         B, BtW = asm.operator, asm.weighted_transpose
+        self.kernel = _csr_matvec is not None  # (sparse products through SciPy's kernel)
         if B.shape[0] * B.shape[1] <= DENSE_ENTRIES:  # a few blocks: dense products
             self.B, self.BtW = B.toarray(), BtW.toarray()
             self.d = np.empty(2 * n)
@@ -372,7 +373,7 @@ class _Unbalanced:
             self.pn, self.ps = self.p[0::2], self.p[1::2]
         else:
             order = np.concatenate([np.arange(0, 2 * n, 2), np.arange(1, 2 * n, 2)])
-            self.B = B[order]  # rows moved whole: each sums as before
+            self.B = sp.csr_array(B[order])  # rows moved whole: each sums as before
             where = np.empty_like(order)
             where[order] = np.arange(2 * n)
             # columns renamed in place, not sorted: each row sums in its old order
@@ -381,10 +382,10 @@ class _Unbalanced:
                 shape=BtW.shape,
             )
             self.BtW.has_sorted_indices = False
-            if _csr_matvec is not None:
-                self.B = sp.csr_array(self.B)
-                self.B.data = np.ascontiguousarray(self.B.data, dtype=float)
-                self.BtW.data = np.ascontiguousarray(self.BtW.data, dtype=float)
+            for A in (self.B, self.BtW):  # what the kernel takes: float values,
+                # one index type (else the public product, which converts)
+                A.data = np.ascontiguousarray(A.data, dtype=float)
+                self.kernel = self.kernel and A.indptr.dtype == A.indices.dtype
             self.d = np.empty(2 * n)
             self.p = np.empty(2 * n)
             self.dn, self.ds = self.d[:n], self.d[n:]
@@ -405,7 +406,7 @@ class _Unbalanced:
         """``out[:] = A @ x``, bit for bit (see the class)."""
         if not sp.issparse(A):
             np.matmul(A, x, out=out)
-        elif _csr_matvec is None:
+        elif not self.kernel:
             out[:] = A @ x
         else:
             out.fill(0.0)
