@@ -161,6 +161,26 @@ def test_an_undecided_verdict_says_where_a_slip_history_holds_the_slope():
 
 
 @pytest.mark.slow
+def test_a_restart_that_collapses_where_the_run_found_equilibrium_confirms_the_failure():
+    """Seed 13 (200 blocks, toppling: a set at 102.9 degrees into a 76.2
+    degree face, cross joints 10.5, phi 26.2, brittle c 27.8, kh 0.131):
+    Newton lost equilibrium at 0.4931; the run 2% beyond found equilibrium
+    after three rounds of its failures shedding their cohesion, and the
+    search restarted from there; the restart collapsed, its own check
+    leaving the blocks moving.  The result said 'undecided' 0.4913
+    [0.4896, 0.4931]; the collapse is the confirmation, at that factor."""
+    fos = _fos(build(draw(13)))
+    assert fos.proof == "dynamic-relaxation"
+    lo, hi = fos.bracket
+    assert fos.value == lo
+    assert fos.confirmed_upper_bound == pytest.approx(hi)
+    assert "from where the run stopped" in fos.failed_analysis.evidence.relaxation
+    restart = [t for t in fos.trials if t.factor == hi]
+    assert restart and not restart[-1].stable
+    assert restart[-1].evidence.proof == "dynamic-relaxation"
+
+
+@pytest.mark.slow
 def test_the_mechanism_does_not_depend_on_the_frame():
     """Seed 3 (196 blocks, a set at 57.2 degrees behind a 54.7 degree face,
     vertical cross joints, phi 56.7, r_u 0.247, kh 0.089): FS 3.5304

@@ -317,11 +317,14 @@ def factor_of_safety(
             if b.stable:
                 lo_an, hi_an, hi_F = b, None, np.inf
                 continue
-            if moved_at is not None and b.evidence.proof == "dynamic-relaxation":
-                # the restart's own check left the blocks moving at the nearer
-                # margin: failure is confirmed there, not only at the farther one
-                # (a toppling staircase with a toe strut: bracket [1.4587, 1.5319]
-                # reported while the blocks moved at 1.4881)
+            if b.evidence.proof == "dynamic-relaxation":
+                # the restart's own check left the blocks moving where the run
+                # stopped: failure is confirmed there (at the nearer margin, not
+                # only at the farther one: a toppling staircase with a toe strut,
+                # bracket [1.4587, 1.5319] reported while the blocks moved at
+                # 1.4881; where the run found equilibrium that the committed
+                # failures then lost: a toppling slope with brittle cohesion
+                # read 'undecided' although the restart collapsed there)
                 text = f"{b.evidence.relaxation} at F = {beyond:.6g}, from where the run stopped"
                 hi_an = with_relaxation(hi_an, text, beyond)
                 moved_at = beyond
